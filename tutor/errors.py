@@ -1,0 +1,47 @@
+"""Named errors of the tutor.
+
+Every error a user can provoke with bad input is one of these classes, and its
+message says what was wrong and how to fix it. Each class also derives from the
+matching built-in (``ValueError`` or ``RuntimeError``) so that generic handlers
+keep working.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "TutorError",
+    "InvalidDemoError",
+    "InvalidFrameError",
+    "DemoFrameMismatchError",
+    "TooFewSamplesError",
+    "InvalidParameterError",
+    "NotFittedError",
+]
+
+
+class TutorError(Exception):
+    """Base class of every error raised on purpose by :mod:`tutor`."""
+
+
+class InvalidDemoError(TutorError, ValueError):
+    """A demonstration cannot be used: NaN/inf, too short, wrong columns, time not increasing."""
+
+
+class InvalidFrameError(TutorError, ValueError):
+    """A task frame is malformed: wrong shape, not finite, or a singular matrix ``A``."""
+
+
+class DemoFrameMismatchError(TutorError, ValueError):
+    """Demonstrations and their task frames do not correspond (counts or sizes differ)."""
+
+
+class TooFewSamplesError(TutorError, ValueError):
+    """There is not enough data for the requested model (e.g. more components than samples)."""
+
+
+class InvalidParameterError(TutorError, ValueError):
+    """A setting is impossible (e.g. a negative number of components)."""
+
+
+class NotFittedError(TutorError, RuntimeError):
+    """A model was asked to reproduce before it was fitted."""

@@ -1,0 +1,175 @@
+r"""Experiment 1 of Sena & Howard: point-to-point reaching through a 2-D maze.
+
+Section "Experiment 1" of the paper. Notation:
+
+X
+    Admissible space: the 20 cm x 30 cm workspace minus two obstacle blocks.
+I
+    Start zone, a 20 cm x 6 cm rectangle at the bottom of X.
+beta
+    Target, a circle of 0.5 cm diameter.
+B^
+    The objective approximation of the task space: one test condition per point
+    of a 20 x 7 grid over I (|B^| = 140).
+
+A state is :math:`\xi = (t, x, y)` with normalised time t in [0, 1]; positions
+are in metres. The TP-GMM sees four frames per condition: the start point, the
+target and the two obstacles (all axis-aligned), with K = 11 components.
+
+The paper gives no obstacle positions; ours live in ``assets/maze.json`` (one
+editable place) and are chosen so that teaching is not trivial: obstacle 1
+juts in from the left wall and obstacle 2 from the right wall, so a start on
+the left must first travel right, and demos from one side do not generalise to
+the other.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import make_interp_spline
+
+from ..tpgmm import Frame, FrameBatch
+
+__all__ = ["Box", "MazeLayout", "load_layout", "DEFAULT_LAYOUT_PATH"]
+
+DEFAULT_LAYOUT_PATH = Path(__file__).resolve().parents[2] / "assets" / "maze.json"
+
+
+@dataclass(frozen=True)
+class Box:
+    """Axis-aligned rectangle ``[x0, x1] x [y0, y1]`` in metres."""
+
+    x0: float
+    x1: float
+    y0: float
+    y1: float
+    name: str = ""
+
+    @property
+    def center(self) -> np.ndarray:
+        return np.array([(self.x0 + self.x1) / 2, (self.y0 + self.y1) / 2])
+
+    def contains(self, points) -> np.ndarray:
+        """Boolean mask (...,) of points (..., 2) inside the closed box."""
+        p = np.asarray(points, dtype=float)
+        return (
+            (p[..., 0] >= self.x0)
+            & (p[..., 0] <= self.x1)
+            & (p[..., 1] >= self.y0)
+            & (p[..., 1] <= self.y1)
+        )
+
+    @classmethod
+    def from_dict(cls, data: dict, name: str = "") -> Box:
+        (x0, x1), (y0, y1) = data["x"], data["y"]
+        return cls(float(x0), float(x1), float(y0), float(y1), data.get("name", name))
+
+
+@dataclass(frozen=True)
+class MazeLayout:
+    """Geometry of the maze (see the module docstring for the symbols)."""
+
+    workspace: Box
+    start_zone: Box
+    target_center: np.ndarray
+    target_diameter: float
+    obstacles: tuple[Box, ...]
+    guide_points: np.ndarray
+    grid_shape: tuple[int, int] = (20, 7)
+    grid_margin: float = 0.005
+    n_components: int = 11
+    n_samples: int = 200
+
+    @property
+    def target_radius(self) -> float:
+        return self.target_diameter / 2
+
+    @cached_property
+    def test_starts(self) -> np.ndarray:
+        """The B^ grid over the start zone, shape (nx * ny, 2), row-major in y."""
+        nx, ny = self.grid_shape
+        m, z = self.grid_margin, self.start_zone
+        xs = np.linspace(z.x0 + m, z.x1 - m, nx)
+        ys = np.linspace(z.y0 + m, z.y1 - m, ny)
+        gx, gy = np.meshgrid(xs, ys)
+        return np.column_stack([gx.ravel(), gy.ravel()])
+
+    def frames(self, start) -> list[Frame]:
+        """Task frames for a start point: start, target, obstacle 1, obstacle 2."""
+        eye = np.eye(2)
+        return [
+            Frame(eye, np.asarray(start, dtype=float)),
+            Frame(eye, self.target_center),
+            *(Frame(eye, obs.center) for obs in self.obstacles),
+        ]
+
+    def frame_batch(self, starts) -> FrameBatch:
+        """Frames for many start points (B, 2) as one :class:`FrameBatch`."""
+        starts = np.asarray(starts, dtype=float).reshape(-1, 2)
+        B, P = starts.shape[0], 2 + len(self.obstacles)
+        fixed = np.vstack([self.target_center, *(o.center for o in self.obstacles)])
+        b = np.concatenate([starts[:, None, :], np.broadcast_to(fixed, (B, P - 1, 2))], axis=1)
+        eye = np.broadcast_to(np.eye(2), (B, P, 2, 2)).copy()
+        return FrameBatch(eye, eye.copy(), b)
+
+    def reference_path(self, start, rng=None, jitter: float = 0.0, n_samples=None) -> np.ndarray:
+        """A smooth scripted demonstration from ``start`` through the gaps to the target.
+
+        Parameters
+        ----------
+        start : array-like (2,)
+        rng : numpy Generator, optional
+            Used when ``jitter`` > 0 to move the guide points.
+        jitter : float
+            Standard deviation (m) of the random offset of each guide point.
+        n_samples : int, optional
+            Number of samples, default ``self.n_samples``.
+
+        Returns
+        -------
+        ndarray (n_samples, 3)
+            Columns (t, x, y), t from 0 to 1, bell-shaped speed profile.
+        """
+        n = self.n_samples if n_samples is None else n_samples
+        guides = self.guide_points
+        if jitter > 0:
+            rng = np.random.default_rng(rng)
+            guides = guides + rng.normal(scale=jitter, size=guides.shape)
+        pts = np.vstack([np.asarray(start, dtype=float), guides, self.target_center])
+        chord = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))]
+        spline = make_interp_spline(chord / chord[-1], pts, k=3, bc_type="natural")
+        dense_u = np.linspace(0.0, 1.0, 2000)
+        dense = spline(dense_u)
+        arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(dense, axis=0), axis=1))]
+        tau = np.linspace(0.0, 1.0, n)
+        progress = 10 * tau**3 - 15 * tau**4 + 6 * tau**5  # minimum-jerk profile
+        u = np.interp(progress * arc[-1], arc, dense_u)
+        xy = spline(u)
+        xy[0], xy[-1] = pts[0], pts[-1]
+        return np.column_stack([tau, xy])
+
+
+def load_layout(path=None) -> MazeLayout:
+    """Read a maze layout from JSON (default: the bundled ``assets/maze.json``)."""
+    path = DEFAULT_LAYOUT_PATH if path is None else Path(path)
+    data = json.loads(path.read_text())
+    grid = data.get("test_grid", {})
+    return MazeLayout(
+        workspace=Box.from_dict(data["workspace"], "workspace"),
+        start_zone=Box.from_dict(data["start_zone"], "start zone"),
+        target_center=np.array(data["target"]["center"], dtype=float),
+        target_diameter=float(data["target"]["diameter"]),
+        obstacles=tuple(
+            Box.from_dict(o, f"obstacle {i + 1}") for i, o in enumerate(data["obstacles"])
+        ),
+        guide_points=np.array(data["guide_points"], dtype=float),
+        grid_shape=(int(grid.get("nx", 20)), int(grid.get("ny", 7))),
+        grid_margin=float(grid.get("margin", 0.005)),
+        n_components=int(data.get("n_components", 11)),
+        n_samples=int(data.get("n_samples", 200)),
+    )
