@@ -51,7 +51,6 @@ Implementation notes
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -77,7 +76,7 @@ _LOG_2PI = np.log(2.0 * np.pi)
 _MAX_CONDITION = 1e12
 
 
-# --------------------------------------------------------------------------- frames
+# --- frames
 
 
 class Frame:
@@ -251,7 +250,7 @@ def _check_frame_row(row, name: str) -> list[Frame]:
     return row
 
 
-# --------------------------------------------------------------------------- validators
+# --- validators
 
 
 def check_demo(demo, name: str = "demo", n_columns: int | None = None) -> np.ndarray:
@@ -332,7 +331,7 @@ def _list_rows(rows: np.ndarray, limit: int = 5) -> str:
     return shown + (", ..." if rows.size > limit else "")
 
 
-# --------------------------------------------------------------------------- small linear algebra
+# --- small linear algebra
 
 
 def _inv(M: np.ndarray) -> np.ndarray:
@@ -356,7 +355,7 @@ def _sym(M: np.ndarray) -> np.ndarray:
     return 0.5 * (M + np.swapaxes(M, -1, -2))
 
 
-# --------------------------------------------------------------------------- the model
+# --- the model
 
 
 class TPGMM:
@@ -452,9 +451,7 @@ class TPGMM:
         else:
             gamma_params = em.m_step(self._initial_responsibilities(data, U))
 
-        weights, means, covs, lb, n_iter, converged = em.run(
-            gamma_params, self.tol, self.max_iter
-        )
+        weights, means, covs, lb, n_iter, converged = em.run(gamma_params, self.tol, self.max_iter)
         self.weights_ = weights
         self.means_ = loc[:, None, :] + means * scale[:, None, :]
         self.covariances_ = covs * scale[:, None, :, None] * scale[:, None, None, :]
@@ -538,7 +535,9 @@ class TPGMM:
         if not (np.isfinite(self.tol) and self.tol >= 0):
             raise InvalidParameterError(f"tol must be >= 0, got {self.tol!r}")
         if not isinstance(self.max_iter, (int, np.integer)) or self.max_iter < 1:
-            raise InvalidParameterError(f"max_iter must be a positive integer, got {self.max_iter!r}")
+            raise InvalidParameterError(
+                f"max_iter must be a positive integer, got {self.max_iter!r}"
+            )
         if self.init_params not in ("time", "random"):
             raise InvalidParameterError(
                 f"init_params must be 'time' or 'random', got {self.init_params!r}"
@@ -601,7 +600,7 @@ class TPGMM:
         return cached
 
 
-# --------------------------------------------------------------------------- data preparation
+# --- data preparation
 
 
 @dataclass
@@ -620,7 +619,9 @@ def _prepare(demos, frames, dim: int | None = None, n_frames: int | None = None)
         demos = list(demos)
         frames = list(frames)
     except TypeError as exc:
-        raise InvalidDemoError("demos and frames must both be sequences (one entry per demo)") from exc
+        raise InvalidDemoError(
+            "demos and frames must both be sequences (one entry per demo)"
+        ) from exc
     if not demos:
         raise InvalidDemoError("no demonstrations given; give at least one")
     if len(demos) != len(frames):
@@ -644,9 +645,7 @@ def _prepare(demos, frames, dim: int | None = None, n_frames: int | None = None)
     A_inv = np.array([[f.A_inv for f in row] for row in rows])  # (M, P, d, d)
     b = np.array([[f.b for f in row] for row in rows])  # (M, P, d)
     x = stacked[:, 1:]
-    local_x = np.einsum(
-        "npij,npj->pni", A_inv[group], x[:, None, :] - b[group]
-    )  # (P, N, d)
+    local_x = np.einsum("npij,npj->pni", A_inv[group], x[:, None, :] - b[group])  # (P, N, d)
     time = stacked[:, 0]
     local = np.concatenate([np.broadcast_to(time, (P, time.size))[..., None], local_x], axis=2)
     return _Data(local=local, time=time)
@@ -664,7 +663,7 @@ def _standardisation(local: np.ndarray):
     return loc, scale
 
 
-# --------------------------------------------------------------------------- EM on sufficient statistics
+# --- EM on sufficient statistics
 
 
 class _EM:
@@ -788,7 +787,7 @@ def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
     return np.log(np.exp(a - m).sum(axis=axis)) + np.squeeze(m, axis=axis)
 
 
-# --------------------------------------------------------------------------- regression and product
+# --- regression and product
 
 
 def _gmr(weights, means, covs, t):
@@ -803,7 +802,9 @@ def _gmr(weights, means, covs, t):
     h = np.exp(log_h - _logsumexp(log_h, axis=1)[:, None])
     slope = covs[:, :, 1:, 0] / covs[:, :, :1, 0]  # (P, K, d)
     cond_cov = covs[:, :, 1:, 1:] - slope[..., :, None] * covs[:, :, None, 0, 1:]  # (P, K, d, d)
-    m_k = means[:, None, :, 1:] + slope[:, None] * (t[None, :, None, None] - mu_t[None, None, :, None])
+    m_k = means[:, None, :, 1:] + slope[:, None] * (
+        t[None, :, None, None] - mu_t[None, None, :, None]
+    )
     mean = np.einsum("tk,ptkd->ptd", h, m_k)
     second = np.einsum("tk,pkij->ptij", h, cond_cov) + np.einsum("tk,ptki,ptkj->ptij", h, m_k, m_k)
     cov = second - mean[..., :, None] * mean[..., None, :]

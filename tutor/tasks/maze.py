@@ -99,6 +99,14 @@ class MazeLayout:
         gx, gy = np.meshgrid(xs, ys)
         return np.column_stack([gx.ravel(), gy.ravel()])
 
+    def sample_starts(self, n: int, rng=None) -> np.ndarray:
+        """``n`` start points drawn uniformly in I (inside the grid margin), shape (n, 2)."""
+        rng = np.random.default_rng(rng)
+        m, z = self.grid_margin, self.start_zone
+        return np.column_stack(
+            [rng.uniform(z.x0 + m, z.x1 - m, n), rng.uniform(z.y0 + m, z.y1 - m, n)]
+        )
+
     def frames(self, start) -> list[Frame]:
         """Task frames for a start point: start, target, obstacle 1, obstacle 2."""
         eye = np.eye(2)

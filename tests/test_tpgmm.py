@@ -1,0 +1,432 @@
+"""Tests of the TP-GMM learner (tutor.tpgmm): correctness, invariances, speed-independent."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+import scipy.io
+from conftest import maze_demos, shared_file
+from gmr import GMM
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from tutor.errors import (
+    DemoFrameMismatchError,
+    InvalidDemoError,
+    InvalidFrameError,
+    InvalidParameterError,
+    NotFittedError,
+    TooFewSamplesError,
+    TutorError,
+)
+from tutor.tpgmm import TPGMM, Frame, FrameBatch
+
+# --- helpers
+
+
+def rotation(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+def random_frame(rng, d):
+    while True:
+        A = rng.normal(size=(d, d))
+        if abs(np.linalg.det(A)) > 0.2:
+            return Frame(A, rng.normal(size=d))
+
+
+def blend_weights(t, n_frames):
+    """How much each frame shapes the synthetic demos at times t, shape (T, P)."""
+    w = np.exp(-0.5 * ((t[:, None] - np.linspace(0.0, 1.0, n_frames)) / 0.1) ** 2)
+    return w / w.sum(axis=1, keepdims=True)
+
+
+def frame_demos(rng, n_demos, n_frames, d, n_samples, noise=0.005):
+    """Demos that blend, over time, one fixed local curve per frame (the TP-GMM case).
+
+    Frame j dominates around t = j / (P - 1), where the demo follows the curve
+    c_j(t) expressed in that frame: x(t) = sum_j w_j(t) (A_j c_j(t) + b_j).
+    """
+    t = np.linspace(0.0, 1.0, n_samples)
+    centres = np.linspace(0.0, 1.0, n_frames)
+    w = blend_weights(t, n_frames)
+    i = np.arange(d)
+    curves = [
+        0.3 * np.sin(np.pi * (t[:, None] - centres[j]) * (i + 1) + j) for j in range(n_frames)
+    ]  # each (T, d), zero-ish phase at its own centre
+    demos, frames = [], []
+    for _ in range(n_demos):
+        fr = [random_frame(rng, d) for _ in range(n_frames)]
+        x = sum(w[:, [j]] * fr[j].to_world(curves[j]) for j in range(n_frames))
+        demos.append(np.column_stack([t, x + noise * rng.normal(size=x.shape)]))
+        frames.append(fr)
+    return demos, frames
+
+
+# --- recovery
+
+
+def test_recovers_a_known_mixture():
+    """One identity frame, data drawn from 3 time-separated Gaussians: parameters come back."""
+    rng = np.random.default_rng(0)
+    true_means = np.array([[0.2, 1.0, -1.0], [0.5, 3.0, 0.0], [0.8, 0.0, 2.0]])
+    true_sd = np.array([0.04, 0.1, 0.1])
+    demos = []
+    for _ in range(6):
+        parts = [m + true_sd * rng.normal(size=(100, 3)) for m in true_means]
+        demo = np.concatenate(parts)
+        demos.append(demo[np.argsort(demo[:, 0])])
+    model = TPGMM(3).fit(demos, [[Frame.identity(2)]] * 6)
+    order = np.argsort(model.means_[0, :, 0])
+    np.testing.assert_allclose(model.weights_[order], 1 / 3, atol=0.02)
+    np.testing.assert_allclose(model.means_[0, order], true_means, atol=0.03)
+    sd = np.sqrt(np.diagonal(model.covariances_[0, order], axis1=1, axis2=2))
+    np.testing.assert_allclose(sd, np.broadcast_to(true_sd, sd.shape), rtol=0.15)
+    assert model.converged_
+
+
+def test_reproduction_retraces_training_demos_where_one_frame_explains_them():
+    """Where one frame dominates the synthetic demos, reproduction under the training frames
+    follows each demo; in the hand-over between frames no frame explains the data, so
+    TP-GMM is not expected to retrace it."""
+    rng = np.random.default_rng(1)
+    demos, frames = frame_demos(rng, 6, 2, 2, 150)
+    model = TPGMM(8).fit(demos, frames)
+    for demo, fr in zip(demos, frames, strict=True):
+        mean, _ = model.reproduce(fr, demo[:, 0])
+        explained = blend_weights(demo[:, 0], 2).max(axis=1) > 0.999
+        spread = np.ptp(demo[:, 1:], axis=0).max()
+        err = np.linalg.norm(mean - demo[:, 1:], axis=1)
+        assert explained.sum() > 50
+        assert np.sqrt(np.mean(err[explained] ** 2)) < 0.05 * spread
+        assert err[0] < 0.03 * spread and err[-1] < 0.03 * spread
+
+
+# --- the maze-like acceptance
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_maze_eight_demos_reach_every_start_and_the_goal(layout, seed):
+    demos, frames = maze_demos(layout, 8, seed)
+    model = TPGMM(layout.n_components).fit(demos, frames)
+    mean, _ = model.reproduce_batch(layout.frame_batch(layout.test_starts), demos[0][:, 0])
+    start_err = np.linalg.norm(mean[:, 0] - layout.test_starts, axis=1)
+    end_err = np.linalg.norm(mean[:, -1] - layout.target_center, axis=1)
+    assert start_err.max() <= 0.015
+    assert end_err.max() <= 0.005
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_maze_five_demos_start_within_five_cm(layout, seed):
+    demos, frames = maze_demos(layout, 5, 100 + seed)
+    model = TPGMM(layout.n_components).fit(demos, frames)
+    mean, _ = model.reproduce_batch(layout.frame_batch(layout.test_starts), demos[0][:, 0])
+    assert np.linalg.norm(mean[:, 0] - layout.test_starts, axis=1).max() <= 0.05
+
+
+@pytest.mark.parametrize("n_demos, seed", [(3, 0), (5, 1), (8, 2), (12, 3), (20, 4)])
+def test_default_tol_stops_near_the_long_run_optimum(layout, n_demos, seed):
+    """The default tol ends within 0.01 of what 1000 EM iterations reach."""
+    demos, frames = maze_demos(layout, n_demos, seed)
+    default = TPGMM(layout.n_components).fit(demos, frames)
+    long_run = TPGMM(layout.n_components, tol=0.0, max_iter=1000).fit(demos, frames)
+    assert long_run.n_iter_ >= default.n_iter_  # ran to 1000 or to an exact fixed point
+    assert default.converged_
+    assert long_run.lower_bound_ - default.lower_bound_ <= 0.01
+
+
+def test_warm_start_refits_quickly_and_as_well(layout):
+    demos, frames = maze_demos(layout, 12, 7)
+    model = TPGMM(layout.n_components, warm_start=True).fit(demos[:-1], frames[:-1])
+    cold = TPGMM(layout.n_components).fit(demos, frames)
+    model.fit(demos, frames)
+    assert model.n_iter_ < cold.n_iter_
+    assert model.lower_bound_ >= cold.lower_bound_ - 0.01
+
+
+# --- invariances
+
+
+def test_one_affine_map_on_all_frames_maps_the_reproduction():
+    rng = np.random.default_rng(2)
+    demos, frames = frame_demos(rng, 5, 3, 2, 60)
+    model = TPGMM(4).fit(demos, frames)
+    G = 2.5 * rotation(0.7) @ np.diag([1.0, -1.0])  # scaled and reflected
+    g = np.array([3.0, -1.0])
+    times = np.linspace(0, 1, 50)
+    new = [random_frame(rng, 2) for _ in range(3)]
+    mean, cov = model.reproduce(new, times)
+    mean_g, cov_g = model.reproduce([f.transformed(G, g) for f in new], times)
+    np.testing.assert_allclose(mean_g, mean @ G.T + g, atol=1e-9)
+    np.testing.assert_allclose(cov_g, G @ cov @ G.T, rtol=1e-8, atol=1e-12)
+
+
+def test_fitting_transformed_demos_and_frames_gives_the_same_local_model():
+    rng = np.random.default_rng(3)
+    demos, frames = frame_demos(rng, 5, 2, 3, 50)
+    G = 0.316 * np.diag([1.0, -1.0, 1.0]) @ np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    g = np.array([1.0, 2.0, -3.0])
+    moved = [np.column_stack([d[:, 0], d[:, 1:] @ G.T + g]) for d in demos]
+    moved_frames = [[f.transformed(G, g) for f in fr] for fr in frames]
+    a = TPGMM(4).fit(demos, frames)
+    b = TPGMM(4).fit(moved, moved_frames)
+    np.testing.assert_allclose(a.means_, b.means_, atol=1e-8)
+    np.testing.assert_allclose(a.covariances_, b.covariances_, atol=1e-8)
+    np.testing.assert_allclose(a.weights_, b.weights_, atol=1e-10)
+
+
+def test_batch_equals_one_by_one():
+    rng = np.random.default_rng(4)
+    demos, frames = frame_demos(rng, 4, 3, 2, 40)
+    model = TPGMM(3).fit(demos, frames)
+    conditions = [[random_frame(rng, 2) for _ in range(3)] for _ in range(7)]
+    times = np.linspace(0, 1, 30)
+    mean_b, cov_b = model.reproduce_batch(conditions, times)
+    assert mean_b.shape == (7, 30, 2) and cov_b.shape == (7, 30, 2, 2)
+    for i, fr in enumerate(conditions):
+        mean, cov = model.reproduce(fr, times)
+        np.testing.assert_allclose(mean_b[i], mean, atol=1e-12)
+        np.testing.assert_allclose(cov_b[i], cov, atol=1e-12)
+    mean_fb, _ = model.reproduce_batch(FrameBatch.from_frames(conditions), times)
+    np.testing.assert_allclose(mean_fb, mean_b, atol=1e-12)
+
+
+@pytest.mark.parametrize("d", [1, 2, 3, 4])
+def test_one_identity_frame_is_plain_gmr(d):
+    """With one identity frame, reproduce equals GMR by the independent gmr package."""
+    rng = np.random.default_rng(5 + d)
+    demos, frames = frame_demos(rng, 4, 1, d, 80)
+    frames = [[Frame.identity(d)] for _ in demos]
+    model = TPGMM(4).fit(demos, frames)
+    times = np.linspace(-0.1, 1.1, 25)
+    mean, cov = model.reproduce([Frame.identity(d)], times)
+    gmm = GMM(4, priors=model.weights_, means=model.means_[0], covariances=model.covariances_[0])
+    for i, t in enumerate(times):
+        mvn = gmm.condition([0], np.array([t])).to_mvn()
+        np.testing.assert_allclose(mean[i], mvn.mean, rtol=1e-7, atol=1e-9)
+        np.testing.assert_allclose(cov[i], mvn.covariance, rtol=1e-6, atol=1e-10)
+
+
+# --- scaled and reflected frames
+
+
+def test_scaled_reflected_frames_round_trip():
+    f = Frame(0.316 * np.array([[0.38, -0.92], [-0.92, -0.38]]), [0.4, -0.2])
+    assert np.linalg.det(f.A) < 0
+    x = np.random.default_rng(0).normal(size=(10, 2))
+    np.testing.assert_allclose(f.to_local(f.to_world(x)), x, atol=1e-12)
+    np.testing.assert_allclose(f.to_world(f.to_local(x)), x, atol=1e-12)
+    assert not np.allclose(f.A_inv, f.A.T)  # A^T would be the wrong inverse here
+    assert Frame.from_dict(f.to_dict()) == f
+
+
+def test_pbdlib_data02_cross_check():
+    """Outside check on PbDlib's Data02: 4 demos, 2 scaled frames, the second reflected."""
+    mat = scipy.io.loadmat(shared_file("tpgmm-Data02.mat"))
+    demos, frames = [], []
+    for s in mat["s"][0]:
+        demo = s["Data0"].astype(float).T
+        demo[:, 0] *= 0.1  # PbDlib scales time by 0.1
+        demos.append(demo)
+        frames.append([Frame(p["A"][1:, 1:], p["b"][1:, 0]) for p in s["p"][0]])
+    assert np.linalg.det(frames[0][1].A) < 0
+    model = TPGMM(3).fit(demos, frames)
+    for demo, fr in zip(demos, frames, strict=True):
+        mean, _ = model.reproduce(fr, demo[:, 0])
+        spread = np.ptp(demo[:, 1:], axis=0).max()
+        rmse = np.sqrt(np.mean(np.sum((mean - demo[:, 1:]) ** 2, axis=1)))
+        assert rmse < 0.25 * spread
+        assert np.linalg.norm(mean[0] - fr[0].b) < 0.1 * spread
+        assert np.linalg.norm(mean[-1] - fr[1].b) < 0.1 * spread
+    new = [frames[0][0], frames[2][1]]  # frames never seen together
+    mean, _ = model.reproduce(new, demos[0][:, 0])
+    assert np.linalg.norm(mean[0] - new[0].b) < 0.08
+    assert np.linalg.norm(mean[-1] - new[1].b) < 0.08
+
+
+# --- properties
+
+problem = st.fixed_dictionaries(
+    {
+        "seed": st.integers(0, 2**31 - 1),
+        "n_demos": st.integers(1, 4),
+        "n_frames": st.integers(1, 3),
+        "d": st.integers(1, 3),
+        "n_samples": st.integers(6, 30),
+        "K": st.integers(1, 4),
+    }
+)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problem)
+def test_objective_never_decreases_and_covariances_stay_spd(p):
+    rng = np.random.default_rng(p["seed"])
+    demos, frames = frame_demos(rng, p["n_demos"], p["n_frames"], p["d"], p["n_samples"])
+    bounds = []
+    for n in (1, 2, 3, 5, 8, 13, 21, 40):
+        model = TPGMM(p["K"], tol=0.0, max_iter=n).fit(demos, frames)
+        bounds.append(model.lower_bound_)
+        np.testing.assert_allclose(model.covariances_, np.swapaxes(model.covariances_, -1, -2))
+        assert np.all(np.linalg.eigvalsh(model.covariances_) > 0)
+    assert np.all(np.diff(bounds) >= -1e-9 * (1 + np.abs(bounds[:-1])))
+    mean, cov = model.reproduce(
+        [random_frame(rng, p["d"]) for _ in range(p["n_frames"])], np.linspace(0, 1, 9)
+    )
+    assert np.all(np.isfinite(mean))
+    np.testing.assert_allclose(cov, np.swapaxes(cov, -1, -2), atol=1e-12)
+    assert np.all(np.linalg.eigvalsh(cov) > 0)
+    np.testing.assert_allclose(model.weights_.sum(), 1.0)
+
+
+def test_random_initialisation_is_reproducible():
+    rng = np.random.default_rng(9)
+    demos, frames = frame_demos(rng, 3, 2, 2, 40)
+    a = TPGMM(3, init_params="random", random_state=4).fit(demos, frames)
+    b = TPGMM(3, init_params="random", random_state=4).fit(demos, frames)
+    np.testing.assert_array_equal(a.means_, b.means_)
+
+
+def test_demos_of_different_lengths():
+    rng = np.random.default_rng(10)
+    d1, f1 = frame_demos(rng, 2, 2, 2, 30)
+    d2, f2 = frame_demos(rng, 2, 2, 2, 70)
+    model = TPGMM(3).fit(d1 + d2, f1 + f2)
+    assert model.means_.shape == (2, 3, 3) and model.covariances_.shape == (2, 3, 3, 3)
+
+
+# --- degenerate input that must work
+
+
+def test_identical_demos_and_a_single_demo_fit(layout):
+    demo = layout.reference_path(layout.test_starts[0])
+    fr = layout.frames(layout.test_starts[0])
+    for demos in ([demo], [demo, demo.copy(), demo.copy()]):
+        model = TPGMM(layout.n_components).fit(demos, [fr] * len(demos))
+        mean, cov = model.reproduce(fr, demo[:, 0])
+        assert np.all(np.isfinite(mean)) and np.all(np.isfinite(cov))
+        assert np.linalg.norm(mean[0] - demo[0, 1:]) < 0.01
+
+
+def test_constant_coordinate_column_fits():
+    t = np.linspace(0, 1, 50)
+    demo = np.column_stack([t, np.sin(t), np.zeros_like(t)])
+    model = TPGMM(3).fit([demo], [[Frame.identity(2)]])
+    mean, _ = model.reproduce([Frame.identity(2)], t)
+    assert np.all(np.isfinite(mean))
+
+
+# --- bad input gives named errors
+
+
+@pytest.fixture
+def simple():
+    t = np.linspace(0, 1, 20)
+    demo = np.column_stack([t, t, t**2])
+    return demo, [Frame.identity(2), Frame.from_angle([1.0, 1.0], 0.3)]
+
+
+@pytest.mark.parametrize(
+    "mutate, error, words",
+    [
+        (
+            lambda d: np.where(np.arange(d.size).reshape(d.shape) == 7, np.nan, d),
+            InvalidDemoError,
+            "NaN",
+        ),
+        (
+            lambda d: np.where(np.arange(d.size).reshape(d.shape) == 7, np.inf, d),
+            InvalidDemoError,
+            "inf",
+        ),
+        (lambda d: d[:1], InvalidDemoError, "at least 2"),
+        (lambda d: d[:, :2], InvalidDemoError, "columns"),
+        (lambda d: np.column_stack([d, d[:, 1]]), InvalidDemoError, "columns"),
+        (lambda d: d[::-1], InvalidDemoError, "increasing"),
+        (lambda d: np.vstack([d[:5], d[4:]]), InvalidDemoError, "increasing"),
+        (lambda d: d.ravel(), InvalidDemoError, "2-D"),
+        (lambda d: "not a demo", InvalidDemoError, "numeric"),
+    ],
+)
+def test_bad_demo_raises_named_error(simple, mutate, error, words):
+    demo, frames = simple
+    with pytest.raises(error, match=words) as info:
+        TPGMM(2).fit([mutate(demo)], [frames])
+    assert isinstance(info.value, TutorError)
+
+
+def test_demo_and_frame_counts_must_match(simple):
+    demo, frames = simple
+    with pytest.raises(DemoFrameMismatchError, match="2 demos but 1"):
+        TPGMM(2).fit([demo, demo], [frames])
+
+
+def test_frames_must_match_between_demos(simple):
+    demo, frames = simple
+    with pytest.raises(DemoFrameMismatchError):
+        TPGMM(2).fit([demo, demo], [frames, frames[:1]])
+
+
+def test_singular_frame_is_rejected():
+    with pytest.raises(InvalidFrameError, match="singular"):
+        Frame([[1.0, 2.0], [2.0, 4.0]], [0.0, 0.0])
+    with pytest.raises(InvalidFrameError, match="shape"):
+        Frame(np.eye(2), [0.0, 0.0, 0.0])
+    with pytest.raises(InvalidFrameError, match="finite"):
+        Frame([[np.nan, 0], [0, 1]], [0.0, 0.0])
+
+
+def test_more_components_than_samples(simple):
+    demo, frames = simple
+    with pytest.raises(TooFewSamplesError, match="n_components"):
+        TPGMM(50).fit([demo], [frames])
+
+
+def test_reproduce_before_fit(simple):
+    _, frames = simple
+    with pytest.raises(NotFittedError, match="fit"):
+        TPGMM(2).reproduce(frames, [0.0, 1.0])
+
+
+def test_reproduce_with_wrong_frames(simple):
+    demo, frames = simple
+    model = TPGMM(2).fit([demo], [frames])
+    with pytest.raises(DemoFrameMismatchError):
+        model.reproduce(frames[:1], [0.0, 1.0])
+    with pytest.raises(InvalidFrameError):
+        model.reproduce([np.eye(2), np.eye(2)], [0.0, 1.0])
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"n_components": 0},
+        {"reg_covar": -1.0},
+        {"tol": -1},
+        {"max_iter": 0},
+        {"init_params": "kmeans"},
+        {"n_components": 2.5},
+    ],
+)
+def test_impossible_settings(simple, kwargs):
+    demo, frames = simple
+    with pytest.raises(InvalidParameterError):
+        TPGMM(**kwargs).fit([demo], [frames])
+
+
+def test_single_array_instead_of_list(simple):
+    demo, frames = simple
+    with pytest.raises(InvalidDemoError, match="wrap"):
+        TPGMM(2).fit(demo, [frames])
+
+
+def test_failed_fit_leaves_model_unchanged(simple):
+    demo, frames = simple
+    model = TPGMM(2, warm_start=True).fit([demo], [frames])
+    before = copy.deepcopy(model.means_)
+    with pytest.raises(InvalidDemoError):
+        model.fit([demo, demo[:1]], [frames, frames])
+    np.testing.assert_array_equal(model.means_, before)
