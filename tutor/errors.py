@@ -16,6 +16,7 @@ __all__ = [
     "TooFewSamplesError",
     "InvalidParameterError",
     "NotFittedError",
+    "InvalidFileError",
 ]
 
 
@@ -45,3 +46,7 @@ class InvalidParameterError(TutorError, ValueError):
 
 class NotFittedError(TutorError, RuntimeError):
     """A model was asked to reproduce before it was fitted."""
+
+
+class InvalidFileError(TutorError, ValueError):
+    """A session or demonstration file is corrupt, truncated, of the wrong kind or hostile."""

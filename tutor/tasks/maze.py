@@ -33,9 +33,11 @@ from pathlib import Path
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
-from ..tpgmm import Frame, FrameBatch
+from ..errors import InvalidDemoError
+from ..framework.task import Task, Verdict
+from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
 
-__all__ = ["Box", "MazeLayout", "load_layout", "DEFAULT_LAYOUT_PATH"]
+__all__ = ["Box", "MazeLayout", "MazeTask", "load_layout", "DEFAULT_LAYOUT_PATH"]
 
 DEFAULT_LAYOUT_PATH = Path(__file__).resolve().parents[2] / "assets" / "maze.json"
 
@@ -181,3 +183,164 @@ def load_layout(path=None) -> MazeLayout:
         n_components=int(data.get("n_components", 11)),
         n_samples=int(data.get("n_samples", 200)),
     )
+
+
+class MazeTask(Task):
+    """Experiment 1 as a :class:`~tutor.framework.Task`.
+
+    Conditions are start points (x, y) on the 20 x 7 grid over I. A trajectory
+    (demo or realisation) is in B iff (i) every sample lies in X (inside the
+    workspace, outside both obstacles), (ii) its first sample lies in I and
+    (iii) its last sample lies in beta.
+
+    Parameters
+    ----------
+    layout : MazeLayout, optional
+        Defaults to the bundled ``assets/maze.json``.
+    """
+
+    name = "maze"
+    ambiguity_distance = 0.01  # demos on average closer than 1 cm count as similar
+    condition_noun = "start point"
+    condition_noun_plural = "start points"
+    #: a recorded stroke shorter than this (m) is junk, not a demonstration
+    min_path_length = 0.02
+
+    def __init__(self, layout: MazeLayout | None = None):
+        self.layout = load_layout() if layout is None else layout
+        self._times = np.linspace(0.0, 1.0, self.layout.n_samples)
+        self._conditions = self.layout.test_starts
+        self._batch = self.layout.frame_batch(self._conditions)
+        nx, ny = self.layout.grid_shape
+        z, m = self.layout.start_zone, self.layout.grid_margin
+        self._half_cell = np.array(
+            [(z.x1 - z.x0 - 2 * m) / max(nx - 1, 1) / 2, (z.y1 - z.y0 - 2 * m) / max(ny - 1, 1) / 2]
+        )
+
+    @property
+    def conditions(self) -> np.ndarray:
+        return self._conditions
+
+    @property
+    def times(self) -> np.ndarray:
+        return self._times
+
+    def frames(self, condition) -> list[Frame]:
+        return self.layout.frames(condition)
+
+    def frame_batch(self, conditions) -> FrameBatch:
+        if conditions is self._conditions:
+            return self._batch
+        return self.layout.frame_batch(conditions)
+
+    def make_learner(self) -> TPGMM:
+        return TPGMM(self.layout.n_components, warm_start=True)
+
+    def format_distance(self, distance: float) -> str:
+        return f"{100 * distance:.1f} cm"
+
+    def condition_of(self, demo: np.ndarray) -> np.ndarray:
+        return np.asarray(demo)[0, 1:3]
+
+    # ---------------------------------------------------------------- demos
+
+    def preprocess(self, raw) -> np.ndarray:
+        """Check a recording of (t, x, y) in metres and resample it to the layout's length.
+
+        Rejects (with :class:`InvalidDemoError`) NaN/inf, fewer than 2 samples, a
+        wrong number of columns, time that does not increase, coordinates that
+        look like centimetres or millimetres, and strokes too short to be a
+        demonstration. Positions outside the maze are accepted (the demo is then
+        judged incorrect).
+        """
+        demo = check_demo(raw, "the demonstration", n_columns=3)
+        xy = demo[:, 1:]
+        ws = self.layout.workspace
+        size = max(ws.x1 - ws.x0, ws.y1 - ws.y0)
+        extent = float(np.abs(xy).max())
+        if extent > 3 * size:
+            unit = ""
+            if extent <= 150 * size:
+                unit = " It looks like centimetres: divide the positions by 100."
+            elif extent <= 1500 * size:
+                unit = " It looks like millimetres: divide the positions by 1000."
+            raise InvalidDemoError(
+                f"positions reach {extent:.4g}, far outside the "
+                f"{100 * (ws.x1 - ws.x0):.0f} x {100 * (ws.y1 - ws.y0):.0f} cm maze; "
+                f"positions must be in metres.{unit}"
+            )
+        length = float(np.linalg.norm(np.diff(xy, axis=0), axis=1).sum())
+        if length < self.min_path_length:
+            raise InvalidDemoError(
+                f"the stroke is only {100 * length:.1f} cm long; a demonstration goes from "
+                "the start zone to the target"
+            )
+        t = demo[:, 0]
+        s = (t - t[0]) / (t[-1] - t[0])
+        x = np.interp(self._times, s, xy[:, 0])
+        y = np.interp(self._times, s, xy[:, 1])
+        return np.column_stack([self._times, x, y])
+
+    # ---------------------------------------------------------------- criteria
+
+    def judge(self, trajectories: np.ndarray, conditions=None) -> Verdict:
+        """Criteria (i)-(iii) for trajectories (B, T, 2), with the reason for each failure."""
+        traj = np.asarray(trajectories, dtype=float)
+        lay = self.layout
+        in_obstacle = np.stack([o.contains(traj) for o in lay.obstacles])  # (O, B, T)
+        outside = ~lay.workspace.contains(traj)
+        bad_sample = outside | in_obstacle.any(axis=0)  # violates (i)
+        starts_ok = lay.start_zone.contains(traj[:, 0])  # (ii)
+        end_dist = np.linalg.norm(traj[:, -1] - lay.target_center, axis=1)
+        ends_ok = end_dist <= lay.target_radius  # (iii)
+        path_ok = ~bad_sample.any(axis=1)
+        passed = path_ok & starts_ok & ends_ok
+        reasons = [""] * traj.shape[0]
+        n_samples = traj.shape[1]
+        for i in np.flatnonzero(~passed):
+            parts = []
+            if not starts_ok[i]:
+                parts.append("did not start in the start zone")
+            if not path_ok[i]:
+                k = int(np.argmax(bad_sample[i]))
+                hit = np.flatnonzero(in_obstacle[:, i, k])
+                where = f"at sample {k + 1} of {n_samples}"
+                if hit.size:
+                    parts.append(f"hit {lay.obstacles[hit[0]].name} {where}")
+                else:
+                    parts.append(f"left the workspace {where}")
+            if not ends_ok[i]:
+                parts.append(f"ended {self.format_distance(end_dist[i])} from the target")
+            reasons[i] = ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1]
+        return Verdict(passed, tuple(reasons))
+
+    # ---------------------------------------------------------------- coverage
+
+    def demonstrated(self, demo_conditions) -> np.ndarray:
+        """Grid points within half a grid cell (in x and in y) of a demo's start."""
+        starts = np.asarray(demo_conditions, dtype=float).reshape(-1, 2)
+        gap = np.abs(self._conditions[:, None, :] - starts[None, :, :])  # (n, m, 2)
+        return np.any(np.all(gap <= self._half_cell * (1 + 1e-9), axis=2), axis=1)
+
+    def describe_where(self, mask) -> str:
+        """Which part of the start zone holds most of the masked start points."""
+        mask = np.asarray(mask, dtype=bool)
+        if mask.all():
+            return "everywhere in the start zone"
+        pts = self._conditions[mask]
+        if pts.size == 0:
+            return "nowhere"
+        z = self.layout.start_zone
+        col = np.clip(((pts[:, 0] - z.x0) / (z.x1 - z.x0) * 3).astype(int), 0, 2)
+        row = np.clip(((pts[:, 1] - z.y0) / (z.y1 - z.y0) * 2).astype(int), 0, 1)
+        counts = np.zeros((2, 3), dtype=int)
+        np.add.at(counts, (row, col), 1)
+        cols = np.array(["left", "middle", "right"])
+        rows = np.array(["bottom", "top"])
+        by_col = counts.sum(axis=0)
+        if by_col.max() >= 0.6 * len(pts):
+            c = int(np.argmax(by_col))
+            by_row = counts[:, c]
+            side = f"{rows[int(np.argmax(by_row))]} " if by_row.max() >= 0.75 * by_row.sum() else ""
+            return f"mostly {side}{cols[c]} of the start zone"
+        return "spread across the start zone"

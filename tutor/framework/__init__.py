@@ -1,0 +1,30 @@
+"""The teaching framework of Sena & Howard, independent of any particular task.
+
+- :mod:`.task`: what a task supplies (test conditions B^, frames, criteria).
+- :mod:`.metrics`: efficacy eps, efficiency eta, the session score.
+- :mod:`.failures`: incorrect, ambiguous and undemonstrated failures.
+- :mod:`.session`: :class:`TeachingSession`, demos in, feedback records out.
+"""
+
+from .failures import AMBIGUOUS, INCORRECT, UNDEMONSTRATED, TeachingWarning, Thresholds, similarity
+from .metrics import SessionScore, efficacy, efficiency, session_score
+from .session import FEEDBACK_MODES, FeedbackRecord, TeachingSession
+from .task import Task, Verdict
+
+__all__ = [
+    "AMBIGUOUS",
+    "INCORRECT",
+    "UNDEMONSTRATED",
+    "FEEDBACK_MODES",
+    "FeedbackRecord",
+    "SessionScore",
+    "Task",
+    "TeachingSession",
+    "TeachingWarning",
+    "Thresholds",
+    "Verdict",
+    "efficacy",
+    "efficiency",
+    "session_score",
+    "similarity",
+]

@@ -1,0 +1,75 @@
+r"""Teaching metrics of Sena & Howard (section "Evaluating Teaching").
+
+Notation: B^ the test conditions, R^ the realisations from every condition,
+b the demonstration set with M = |b| demos.
+
+- Teaching efficacy :math:`\varepsilon = |R^ \cap B^| / |B^|` in [0, 1]: the share of
+  test conditions whose realisation meets the task criteria.
+- Teaching efficiency :math:`\eta = \varepsilon / |b|`.
+- The paper's session score (Experiment 1): M is the number of demos needed to first
+  reach 90 % coverage, or all demos if 90 % is never reached; eta is taken there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+
+__all__ = ["efficacy", "efficiency", "SessionScore", "session_score"]
+
+
+def efficacy(passed) -> float:
+    """Share of test conditions passed: eps = |R^ and B^| / |B^|.
+
+    Parameters
+    ----------
+    passed : array-like of bool, shape (n_conditions,)
+    """
+    passed = np.asarray(passed, dtype=bool)
+    if passed.ndim != 1 or passed.size == 0:
+        raise InvalidParameterError(
+            f"passed must be a non-empty 1-D array of booleans, got shape {passed.shape}"
+        )
+    return float(passed.mean())
+
+
+def efficiency(eps: float, n_demos: int) -> float:
+    """eta = eps / |b|; 0 when no demo was given."""
+    if n_demos < 0:
+        raise InvalidParameterError(f"n_demos must be >= 0, got {n_demos}")
+    return 0.0 if n_demos == 0 else float(eps) / n_demos
+
+
+@dataclass(frozen=True)
+class SessionScore:
+    """The paper's score of one teaching run."""
+
+    n_demos: int  #: M: demos to first reach the target coverage, or all demos
+    efficacy: float  #: eps after those M demos
+    efficiency: float  #: eta = eps / M
+    reached: bool  #: whether the target coverage was reached
+
+
+def session_score(efficacies, target: float = 0.9) -> SessionScore:
+    """Score a run from the efficacy after each demo (eps_1, ..., eps_M).
+
+    Parameters
+    ----------
+    efficacies : array-like, shape (M,)
+        eps after demo 1, 2, ..., M.
+    target : float
+        Coverage to reach (the paper uses 0.9).
+    """
+    eps = np.asarray(efficacies, dtype=float)
+    if eps.ndim != 1 or eps.size == 0:
+        raise InvalidParameterError(
+            "a run needs at least one demo to be scored; efficacies must be a non-empty 1-D array"
+        )
+    if not 0.0 < target <= 1.0:
+        raise InvalidParameterError(f"target coverage must be in (0, 1], got {target}")
+    hits = np.flatnonzero(eps >= target - 1e-12)
+    m = int(hits[0]) + 1 if hits.size else eps.size
+    return SessionScore(m, float(eps[m - 1]), float(eps[m - 1]) / m, bool(hits.size))

@@ -1,0 +1,406 @@
+r"""A teaching session: demos in, feedback records out (Sena & Howard, sections
+"Learning and Teaching Framework" and "Evaluating Teaching").
+
+After each demo the session refits the learner :math:`\lambda` (warm start),
+realises the task from every test condition in B^ to get R^, judges R^ with the
+task's criteria, and reports efficacy eps, efficiency eta, the change in eps, the
+set r of realisations the teacher is shown (by feedback mode) and the failures
+(incorrect, ambiguous, undemonstrated; see :mod:`tutor.framework.failures`).
+
+Feedback modes (what r is):
+
+``"none"``      r is empty (NF).
+``"all"``       r = R^ (the paper's visual feedback, VF/VR).
+``"replay"``    r = the realisation for the last demo's own condition (RF).
+``"batch"``     r = a fixed subset of B^ after every demo (BF).
+``"selected"``  r = the conditions the teacher asks for (SF).
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InvalidFileError, InvalidParameterError, TutorError
+from ..fileio import read_json, write_json
+from .failures import (
+    AMBIGUOUS,
+    INCORRECT,
+    UNDEMONSTRATED,
+    TeachingWarning,
+    Thresholds,
+    similarity,
+)
+from .metrics import SessionScore, efficacy, efficiency, session_score
+from .task import Task
+
+__all__ = ["FeedbackRecord", "TeachingSession", "FEEDBACK_MODES", "SESSION_FORMAT"]
+
+FEEDBACK_MODES = ("none", "all", "replay", "batch", "selected")
+SESSION_FORMAT = "lfd-tutor-session"
+SESSION_VERSION = 1
+
+
+@dataclass(frozen=True)
+class FeedbackRecord:
+    """What the tutor knows after demo number ``n_demos``.
+
+    Arrays are over the test conditions B^ (length n) unless said otherwise.
+    """
+
+    n_demos: int  #: M = |b|
+    efficacy: float  #: eps_M
+    efficiency: float  #: eta_M = eps_M / M
+    delta: float  #: eps_M - eps_{M-1}
+    passed: np.ndarray  #: bool (n,): realisation meets the task criteria
+    reasons: tuple[str, ...]  #: why each failing realisation fails ("" if it passes)
+    demo_passed: bool  #: the demo itself meets the criteria (is in B)
+    demo_reason: str  #: why it does not ("" if it does)
+    similarity: float  #: s(b, b_set), inf for the first demo
+    nearest_demo: int | None  #: 1-based number of the most similar earlier demo
+    demonstrated: np.ndarray  #: bool (n,): covered by a correct demo
+    undemonstrated: np.ndarray  #: bool (n,): B^ \ (R^ or b)
+    shown: np.ndarray  #: int (k,): indices of the conditions in r
+    warnings: tuple[TeachingWarning, ...] = field(default=())
+
+    @property
+    def kinds(self) -> set[str]:
+        """The kinds of the warnings of this step."""
+        return {w.kind for w in self.warnings}
+
+    @property
+    def n_undemonstrated(self) -> int:
+        return int(self.undemonstrated.sum())
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (for an educator's export)."""
+        return {
+            "n_demos": self.n_demos,
+            "efficacy": self.efficacy,
+            "efficiency": self.efficiency,
+            "delta": self.delta,
+            "passed": self.passed.astype(int).tolist(),
+            "demo_passed": self.demo_passed,
+            "demo_reason": self.demo_reason,
+            "similarity": None if np.isinf(self.similarity) else self.similarity,
+            "nearest_demo": self.nearest_demo,
+            "n_undemonstrated": self.n_undemonstrated,
+            "shown": self.shown.tolist(),
+            "warnings": [w.to_dict() for w in self.warnings],
+        }
+
+
+class TeachingSession:
+    """One teacher teaching one task.
+
+    Parameters
+    ----------
+    task : Task
+    learner : TPGMM, optional
+        Defaults to ``task.make_learner()``.
+    feedback : {"none", "all", "replay", "batch", "selected"}
+        What the teacher is shown after each demo (see the module docstring).
+    thresholds : Thresholds, optional
+        Failure thresholds; defaults documented in :class:`Thresholds`.
+    batch : sequence of int, optional
+        Indices into ``task.conditions`` shown in ``"batch"`` mode.
+    """
+
+    def __init__(
+        self,
+        task: Task,
+        learner=None,
+        feedback: str = "all",
+        thresholds: Thresholds | None = None,
+        batch=None,
+    ):
+        if feedback not in FEEDBACK_MODES:
+            raise InvalidParameterError(
+                f"feedback must be one of {', '.join(FEEDBACK_MODES)}; got {feedback!r}"
+            )
+        n = len(task.conditions)
+        batch = np.asarray([] if batch is None else batch, dtype=int).ravel()
+        if feedback == "batch" and batch.size == 0:
+            raise InvalidParameterError("feedback='batch' needs batch=[indices of B^ to show]")
+        if np.any((batch < 0) | (batch >= n)):
+            raise InvalidParameterError(
+                f"batch indices must lie in 0..{n - 1}, got {batch.tolist()}"
+            )
+        self.task = task
+        self.feedback = feedback
+        self.thresholds = Thresholds() if thresholds is None else thresholds
+        self.batch = batch
+        self._fresh_learner = learner if learner is not None else task.make_learner()
+        self._demos: list[np.ndarray] = []
+        self._history: list[FeedbackRecord] = []
+        self._learners: list = []
+        self._realisations: list[np.ndarray] = []
+        self.events: list[tuple[str, int]] = []  #: ("add" | "undo" | "reset", n_demos after)
+
+    # ---------------------------------------------------------------- state
+
+    @property
+    def demos(self) -> list[np.ndarray]:
+        """The demonstration set b (preprocessed), oldest first (copies)."""
+        return [d.copy() for d in self._demos]
+
+    @property
+    def history(self) -> list[FeedbackRecord]:
+        """One record per demo, oldest first."""
+        return list(self._history)
+
+    @property
+    def latest(self) -> FeedbackRecord | None:
+        return self._history[-1] if self._history else None
+
+    @property
+    def n_demos(self) -> int:
+        return len(self._demos)
+
+    @property
+    def learner(self):
+        """The learner fitted on the current demos (a fresh one before any demo)."""
+        return self._learners[-1] if self._learners else self._fresh_learner
+
+    @property
+    def realisations(self) -> np.ndarray | None:
+        """R^ after the latest demo: mean trajectories (n, T, d), or None."""
+        return self._realisations[-1] if self._realisations else None
+
+    def score(self, target: float = 0.9) -> SessionScore:
+        """The paper's score: demos to first reach ``target`` coverage and eta there."""
+        return session_score([r.efficacy for r in self._history], target)
+
+    # ---------------------------------------------------------------- teaching
+
+    def add_demo(self, raw, shown=None) -> FeedbackRecord:
+        """Add one demonstration and return the feedback after it.
+
+        Parameters
+        ----------
+        raw : array-like
+            A recording the task's ``preprocess`` accepts (e.g. (T, 3) of t, x, y).
+        shown : sequence of int, optional
+            In ``"selected"`` mode: the test conditions the teacher asks to see.
+
+        Raises
+        ------
+        InvalidDemoError
+            The recording cannot be used; the session is left unchanged.
+        """
+        task = self.task
+        demo = task.preprocess(raw)
+        selected = self._check_shown(shown)
+        demos = [*self._demos, demo]
+        learner = copy.deepcopy(self.learner)
+        learner.fit(demos, [task.frames(task.condition_of(d)) for d in demos])
+        record, realisations = self._evaluate(learner, demos, selected)
+        self._demos.append(demo)
+        self._learners.append(learner)
+        self._realisations.append(realisations)
+        self._history.append(record)
+        self.events.append(("add", self.n_demos))
+        return record
+
+    def undo(self) -> FeedbackRecord | None:
+        """Remove the latest demo; returns the record now current (None if no demo is left)."""
+        if not self._demos:
+            raise InvalidParameterError("there is no demo to undo")
+        for stack in (self._demos, self._learners, self._realisations, self._history):
+            stack.pop()
+        self.events.append(("undo", self.n_demos))
+        return self.latest
+
+    def reset(self) -> None:
+        """Remove every demo."""
+        for stack in (self._demos, self._learners, self._realisations, self._history):
+            stack.clear()
+        self.events.append(("reset", 0))
+
+    def _check_shown(self, shown) -> np.ndarray:
+        if shown is None:
+            return np.zeros(0, dtype=int)
+        if self.feedback != "selected":
+            raise InvalidParameterError("shown= is only used with feedback='selected'")
+        idx = np.asarray(shown, dtype=int).ravel()
+        n = len(self.task.conditions)
+        if np.any((idx < 0) | (idx >= n)):
+            raise InvalidParameterError(f"shown indices must lie in 0..{n - 1}")
+        return idx
+
+    def _evaluate(self, learner, demos, selected):
+        task, thr = self.task, self.thresholds
+        conditions = task.conditions
+        mean, _ = learner.reproduce_batch(task.frame_batch(conditions), task.times)
+        verdict = task.judge(mean, conditions)
+        demo = demos[-1]
+        own = task.judge(demo[None, :, 1:], task.condition_of(demo)[None])
+        m = len(demos)
+        eps = efficacy(verdict.passed)
+        previous = self._history[-1].efficacy if self._history else 0.0
+        delta = eps - previous
+        sim, nearest = similarity(demo, demos[:-1])
+        correct = [d for d, r in zip(demos[:-1], self._history, strict=True) if r.demo_passed]
+        if own.passed[0]:
+            correct.append(demo)
+        demonstrated = (
+            task.demonstrated(np.array([task.condition_of(d) for d in correct]))
+            if correct
+            else np.zeros(len(conditions), dtype=bool)
+        )
+        undemonstrated = ~verdict.passed & ~demonstrated
+        shown = self._shown(demo, selected)
+        delta_a = thr.ambiguity_distance
+        if delta_a is None:
+            delta_a = task.ambiguity_distance
+        ambiguous = sim <= delta_a and thr.delta_lower <= delta <= thr.delta_upper
+
+        warnings = []
+        fmt = task.format_distance
+        if not own.passed[0]:
+            warnings.append(
+                TeachingWarning(
+                    INCORRECT,
+                    f"Demo {m} is not a correct example: it {own.reasons[0]}. "
+                    "Undo it and demonstrate that again.",
+                    demo=m,
+                )
+            )
+        elif ambiguous:
+            warnings.append(
+                TeachingWarning(
+                    AMBIGUOUS,
+                    f"Demo {m} is almost the same as demo {nearest + 1} (on average "
+                    f"{fmt(sim)} apart) and changed efficacy by {100 * delta:+.0f} points: "
+                    "start further from your other demos.",
+                    demo=m,
+                )
+            )
+        elif delta < 0 or (delta == 0 and previous < 1.0):
+            change = (
+                f"efficacy fell from {previous:.0%} to {eps:.0%}"
+                if delta < 0
+                else f"efficacy stayed at {eps:.0%}"
+            )
+            warnings.append(
+                TeachingWarning(
+                    INCORRECT,
+                    f"Demo {m} made things no better ({change}) although it differs from your "
+                    "other demos: check that it shows the task the way you meant; undo it if not.",
+                    demo=m,
+                )
+            )
+        k = int(undemonstrated.sum())
+        if k:
+            noun = task.condition_noun if k == 1 else task.condition_noun_plural
+            warnings.append(
+                TeachingWarning(
+                    UNDEMONSTRATED,
+                    f"{k} {noun} still fail and no demo covers them, "
+                    f"{task.describe_where(undemonstrated)}: demonstrate there next.",
+                    count=k,
+                )
+            )
+        record = FeedbackRecord(
+            n_demos=m,
+            efficacy=eps,
+            efficiency=efficiency(eps, m),
+            delta=delta,
+            passed=verdict.passed,
+            reasons=verdict.reasons,
+            demo_passed=bool(own.passed[0]),
+            demo_reason=own.reasons[0],
+            similarity=sim,
+            nearest_demo=None if nearest < 0 else nearest + 1,
+            demonstrated=demonstrated,
+            undemonstrated=undemonstrated,
+            shown=shown,
+            warnings=tuple(warnings),
+        )
+        return record, mean
+
+    def _shown(self, demo, selected) -> np.ndarray:
+        n = len(self.task.conditions)
+        if self.feedback == "all":
+            return np.arange(n)
+        if self.feedback == "batch":
+            return self.batch.copy()
+        if self.feedback == "replay":
+            own = self.task.demonstrated(self.task.condition_of(demo)[None])
+            return np.flatnonzero(own)
+        if self.feedback == "selected":
+            return selected
+        return np.zeros(0, dtype=int)
+
+    # ---------------------------------------------------------------- files
+
+    def to_dict(self) -> dict:
+        """JSON-ready form; :meth:`from_dict` rebuilds an identical session."""
+        return {
+            "format": SESSION_FORMAT,
+            "version": SESSION_VERSION,
+            "task": self.task.to_spec(),
+            "feedback": self.feedback,
+            "batch": self.batch.tolist(),
+            "thresholds": self.thresholds.to_dict(),
+            "demos": [d.tolist() for d in self._demos],
+            "shown": [
+                r.shown.tolist() if self.feedback == "selected" else None for r in self._history
+            ],
+            "records": [r.to_dict() for r in self._history],
+            "events": [list(e) for e in self.events],
+        }
+
+    @classmethod
+    def from_dict(cls, data, task: Task, learner=None) -> TeachingSession:
+        """Rebuild a session by replaying its demos (raises InvalidFileError when malformed)."""
+        if not isinstance(data, dict) or data.get("format") != SESSION_FORMAT:
+            raise InvalidFileError(
+                "this is not an lfd-tutor session (no 'format': 'lfd-tutor-session' entry)"
+            )
+        if data.get("version") != SESSION_VERSION:
+            raise InvalidFileError(
+                f"session version {data.get('version')!r} is not supported (expected "
+                f"{SESSION_VERSION}); update lfd-tutor"
+            )
+        spec = data.get("task")
+        if not isinstance(spec, dict) or spec.get("name") != task.name:
+            raise InvalidFileError(
+                f"the session is for task {spec.get('name') if isinstance(spec, dict) else spec!r}, "
+                f"not {task.name!r}; open it with the matching task"
+            )
+        demos = data.get("demos")
+        if not isinstance(demos, list):
+            raise InvalidFileError("the session has no list of 'demos'")
+        shown = data.get("shown") or [None] * len(demos)
+        if not isinstance(shown, list) or len(shown) != len(demos):
+            raise InvalidFileError("the session's 'shown' list does not match its demos")
+        try:
+            thresholds = Thresholds(**data.get("thresholds", {}))
+            session = cls(
+                task,
+                learner=learner,
+                feedback=data.get("feedback", "all"),
+                thresholds=thresholds,
+                batch=data.get("batch") or None,
+            )
+            for i, (demo, sel) in enumerate(zip(demos, shown, strict=True)):
+                if not isinstance(demo, list):
+                    raise InvalidFileError(f"demo {i + 1} in the session is not a table of numbers")
+                session.add_demo(demo, shown=sel)
+        except InvalidFileError:
+            raise
+        except (TutorError, TypeError, ValueError) as exc:
+            raise InvalidFileError(f"the session file holds invalid data: {exc}") from exc
+        return session
+
+    def save(self, path):
+        """Write the session to ``path`` atomically (JSON); returns the path."""
+        return write_json(path, self.to_dict())
+
+    @classmethod
+    def load(cls, path, task: Task, learner=None) -> TeachingSession:
+        """Read a session written by :meth:`save`."""
+        return cls.from_dict(read_json(path, "session file"), task, learner)

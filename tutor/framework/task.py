@@ -1,0 +1,101 @@
+r"""What a task must supply to the teaching framework.
+
+Sena & Howard, section "Learning and Teaching Framework": a task defines the
+task space B through success criteria, and an objective approximation B^ of it
+through a finite set of test conditions. A *condition* is whatever selects one
+way of doing the task (a start point in the maze, a plant in pick-and-place);
+the framework only ever handles conditions as rows of an array.
+
+The framework never names a particular task: everything task-specific goes
+through this interface.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..tpgmm import TPGMM, Frame, FrameBatch
+
+__all__ = ["Task", "Verdict"]
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The task criteria applied to a batch of trajectories.
+
+    Attributes
+    ----------
+    passed : ndarray of bool, shape (B,)
+        True where the trajectory is in B (meets every criterion).
+    reasons : tuple of str, length B
+        Empty for a passing trajectory, otherwise the first criterion it fails in
+        plain words ("hit obstacle 2 at sample 57").
+    """
+
+    passed: np.ndarray
+    reasons: tuple[str, ...]
+
+
+class Task(ABC):
+    """A task the teacher demonstrates and the learner must generalise."""
+
+    #: short identifier stored in session files
+    name: str = "task"
+    #: distance (in the task's units) below which a demo counts as similar (delta_a)
+    ambiguity_distance: float = 0.0
+    #: what one test condition is called in messages ("start point", "plant")
+    condition_noun: str = "test condition"
+    condition_noun_plural: str = "test conditions"
+
+    def format_distance(self, distance: float) -> str:
+        """A distance in the task's units, in words for a trainee."""
+        return f"{distance:.3g}"
+
+    @property
+    @abstractmethod
+    def conditions(self) -> np.ndarray:
+        """B^: the test conditions, shape (n_conditions, n_condition_params)."""
+
+    @property
+    @abstractmethod
+    def times(self) -> np.ndarray:
+        """Times at which realisations are produced, shape (T,)."""
+
+    @abstractmethod
+    def frames(self, condition) -> list[Frame]:
+        """The task frames of one condition."""
+
+    def frame_batch(self, conditions) -> FrameBatch:
+        """Frames of many conditions; override for speed."""
+        return FrameBatch.from_frames([self.frames(c) for c in np.asarray(conditions)])
+
+    @abstractmethod
+    def preprocess(self, raw) -> np.ndarray:
+        """Turn a raw recording into a demo (T, 1 + d), or raise InvalidDemoError."""
+
+    @abstractmethod
+    def condition_of(self, demo: np.ndarray) -> np.ndarray:
+        """The condition a (preprocessed) demo was given under."""
+
+    @abstractmethod
+    def judge(self, trajectories: np.ndarray, conditions: np.ndarray) -> Verdict:
+        """Apply the success criteria to trajectories (B, T, d) meant for conditions (B, c)."""
+
+    @abstractmethod
+    def demonstrated(self, demo_conditions: np.ndarray) -> np.ndarray:
+        """Mask (n_conditions,) of the test conditions that the demos' conditions cover."""
+
+    @abstractmethod
+    def describe_where(self, mask: np.ndarray) -> str:
+        """Plain words for where the masked test conditions lie ("mostly bottom left")."""
+
+    @abstractmethod
+    def make_learner(self) -> TPGMM:
+        """A fresh learner (lambda) for this task, with warm starts enabled."""
+
+    def to_spec(self) -> dict:
+        """What a session file records about the task, to rebuild it on loading."""
+        return {"name": self.name}
