@@ -20,6 +20,7 @@ undemonstrated
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -118,3 +119,105 @@ def similarity(demo: np.ndarray, others) -> tuple[float, int]:
     dist = np.linalg.norm(stack - demo[None, :, 1:], axis=2).mean(axis=1)
     nearest = int(np.argmin(dist))
     return float(dist[nearest]), nearest
+
+
+def is_ambiguous(similarity: float, delta: float, ambiguity_distance: float, thresholds) -> bool:
+    """s(b, b_set) <= delta_a and delta_l <= eps_m - eps_{m-1} <= delta_u."""
+    return (
+        similarity <= ambiguity_distance
+        and thresholds.delta_lower <= delta <= thresholds.delta_upper
+    )
+
+
+def demo_warnings(
+    m: int,
+    *,
+    demo_passed: bool,
+    demo_reason: str,
+    delta: float,
+    previous: float,
+    similarity: float,
+    nearest: int | None,
+    ambiguity_distance: float,
+    thresholds: Thresholds,
+    wrong_earlier=(),
+    format_distance: Callable[[float], str] = lambda d: f"{d:.3g}",
+) -> list[TeachingWarning]:
+    """The incorrect or ambiguous warning for demo ``m``, if any (at most one).
+
+    Parameters
+    ----------
+    m : int
+        1-based number of the demo.
+    demo_passed, demo_reason
+        The task criteria applied to the demo itself.
+    delta, previous : float
+        eps_m - eps_{m-1} and eps_{m-1}.
+    similarity, nearest
+        s(b, b_set) and the 1-based number of the nearest earlier demo.
+    ambiguity_distance : float
+        delta_a.
+    wrong_earlier : sequence of int
+        Earlier demos (1-based) that failed the criteria and are still in the set.
+    """
+    if not demo_passed:
+        return [
+            TeachingWarning(
+                INCORRECT,
+                f"Demo {m} is not a correct example: it {demo_reason}. "
+                "Undo it and demonstrate that again.",
+                demo=m,
+            )
+        ]
+    if is_ambiguous(similarity, delta, ambiguity_distance, thresholds):
+        return [
+            TeachingWarning(
+                AMBIGUOUS,
+                f"Demo {m} is almost the same as demo {nearest} (on average "
+                f"{format_distance(similarity)} apart) and changed efficacy by "
+                f"{100 * delta:+.0f} points: start further from your other demos.",
+                demo=m,
+            )
+        ]
+    if delta < 0 or (delta == 0 and previous < 1.0):
+        eps = previous + delta
+        change = (
+            f"efficacy fell from {previous:.0%} to {eps:.0%}"
+            if delta < 0
+            else f"efficacy stayed at {eps:.0%}"
+        )
+        wrong = list(wrong_earlier)
+        if wrong:
+            many = len(wrong) > 1
+            advice = (
+                f"demo{'s' if many else ''} {', '.join(map(str, wrong))} "
+                f"{'are' if many else 'is'} not a correct example and still teach"
+                f"{'' if many else 'es'} the robot the wrong thing: remove "
+                f"{'them' if many else 'it'} first."
+            )
+        else:
+            advice = "check that it shows the task the way you meant; undo it if not."
+        return [
+            TeachingWarning(
+                INCORRECT,
+                f"Demo {m} made things no better ({change}) although it differs from your "
+                f"other demos: {advice}",
+                demo=m,
+            )
+        ]
+    return []
+
+
+def undemonstrated_warning(
+    mask, noun: str, noun_plural: str, describe_where
+) -> TeachingWarning | None:
+    """The warning for B^ \\ (R^ or b) given its mask over the test conditions, or None."""
+    k = int(np.count_nonzero(mask))
+    if k == 0:
+        return None
+    return TeachingWarning(
+        UNDEMONSTRATED,
+        f"{k} {noun if k == 1 else noun_plural} still fail{'s' if k == 1 else ''} and no demo "
+        f"covers {'it' if k == 1 else 'them'}, {describe_where(mask)}: demonstrate there next.",
+        count=k,
+    )

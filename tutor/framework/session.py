@@ -26,12 +26,11 @@ import numpy as np
 from ..errors import InvalidFileError, InvalidParameterError, TutorError
 from ..fileio import read_json, write_json
 from .failures import (
-    AMBIGUOUS,
-    INCORRECT,
-    UNDEMONSTRATED,
     TeachingWarning,
     Thresholds,
+    demo_warnings,
     similarity,
+    undemonstrated_warning,
 )
 from .metrics import SessionScore, efficacy, efficiency, session_score
 from .task import Task
@@ -137,7 +136,9 @@ class TeachingSession:
         self._history: list[FeedbackRecord] = []
         self._learners: list = []
         self._realisations: list[np.ndarray] = []
-        self.events: list[tuple[str, int]] = []  #: ("add" | "undo" | "reset", n_demos after)
+        #: what the teacher did: ("add", n_demos after), ("undo", n_demos after),
+        #: ("remove", number removed) or ("reset", 0)
+        self.events: list[tuple[str, int]] = []
 
     # ---------------------------------------------------------------- state
 
@@ -213,6 +214,27 @@ class TeachingSession:
         self.events.append(("undo", self.n_demos))
         return self.latest
 
+    def remove_demo(self, number: int) -> FeedbackRecord | None:
+        """Remove demo ``number`` (1-based) and replay the later ones; returns the new latest.
+
+        Records after the removed demo are recomputed as if it had never been given.
+        """
+        if not 1 <= number <= self.n_demos:
+            raise InvalidParameterError(
+                f"there is no demo {number}; demos are numbered 1 to {self.n_demos}"
+            )
+        if number == self.n_demos:
+            return self.undo()
+        later = self._demos[number:]
+        shown = [r.shown for r in self._history[number:]]
+        for stack in (self._demos, self._learners, self._realisations, self._history):
+            del stack[number - 1 :]
+        for demo, sel in zip(later, shown, strict=True):
+            self.add_demo(demo, shown=sel if self.feedback == "selected" else None)
+            self.events.pop()
+        self.events.append(("remove", number))
+        return self.latest
+
     def reset(self) -> None:
         """Remove every demo."""
         for stack in (self._demos, self._learners, self._realisations, self._history):
@@ -255,54 +277,24 @@ class TeachingSession:
         delta_a = thr.ambiguity_distance
         if delta_a is None:
             delta_a = task.ambiguity_distance
-        ambiguous = sim <= delta_a and thr.delta_lower <= delta <= thr.delta_upper
-
-        warnings = []
-        fmt = task.format_distance
-        if not own.passed[0]:
-            warnings.append(
-                TeachingWarning(
-                    INCORRECT,
-                    f"Demo {m} is not a correct example: it {own.reasons[0]}. "
-                    "Undo it and demonstrate that again.",
-                    demo=m,
-                )
-            )
-        elif ambiguous:
-            warnings.append(
-                TeachingWarning(
-                    AMBIGUOUS,
-                    f"Demo {m} is almost the same as demo {nearest + 1} (on average "
-                    f"{fmt(sim)} apart) and changed efficacy by {100 * delta:+.0f} points: "
-                    "start further from your other demos.",
-                    demo=m,
-                )
-            )
-        elif delta < 0 or (delta == 0 and previous < 1.0):
-            change = (
-                f"efficacy fell from {previous:.0%} to {eps:.0%}"
-                if delta < 0
-                else f"efficacy stayed at {eps:.0%}"
-            )
-            warnings.append(
-                TeachingWarning(
-                    INCORRECT,
-                    f"Demo {m} made things no better ({change}) although it differs from your "
-                    "other demos: check that it shows the task the way you meant; undo it if not.",
-                    demo=m,
-                )
-            )
-        k = int(undemonstrated.sum())
-        if k:
-            noun = task.condition_noun if k == 1 else task.condition_noun_plural
-            warnings.append(
-                TeachingWarning(
-                    UNDEMONSTRATED,
-                    f"{k} {noun} still fail and no demo covers them, "
-                    f"{task.describe_where(undemonstrated)}: demonstrate there next.",
-                    count=k,
-                )
-            )
+        warnings = demo_warnings(
+            m,
+            demo_passed=bool(own.passed[0]),
+            demo_reason=own.reasons[0],
+            delta=delta,
+            previous=previous,
+            similarity=sim,
+            nearest=None if nearest < 0 else nearest + 1,
+            ambiguity_distance=delta_a,
+            thresholds=thr,
+            wrong_earlier=[i + 1 for i, r in enumerate(self._history) if not r.demo_passed],
+            format_distance=task.format_distance,
+        )
+        missing = undemonstrated_warning(
+            undemonstrated, task.condition_noun, task.condition_noun_plural, task.describe_where
+        )
+        if missing is not None:
+            warnings.append(missing)
         record = FeedbackRecord(
             n_demos=m,
             efficacy=eps,

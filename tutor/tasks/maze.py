@@ -200,7 +200,9 @@ class MazeTask(Task):
     """
 
     name = "maze"
-    ambiguity_distance = 0.01  # demos on average closer than 1 cm count as similar
+    # All admissible paths share the route after the first gap, so whole demos are
+    # on average only ~1 cm apart even from distant starts; 6 mm marks real repeats.
+    ambiguity_distance = 0.006
     condition_noun = "start point"
     condition_noun_plural = "start points"
     #: a recorded stroke shorter than this (m) is junk, not a demonstration
