@@ -320,8 +320,7 @@ class TeachingSession:
         if self.feedback == "batch":
             return self.batch.copy()
         if self.feedback == "replay":
-            own = self.task.demonstrated(self.task.condition_of(demo)[None])
-            return np.flatnonzero(own)
+            return np.array([self.task.nearest_condition(self.task.condition_of(demo))])
         if self.feedback == "selected":
             return selected
         return np.zeros(0, dtype=int)
@@ -359,9 +358,10 @@ class TeachingSession:
             )
         spec = data.get("task")
         if not isinstance(spec, dict) or spec.get("name") != task.name:
+            found = spec.get("name") if isinstance(spec, dict) else spec
             raise InvalidFileError(
-                f"the session is for task {spec.get('name') if isinstance(spec, dict) else spec!r}, "
-                f"not {task.name!r}; open it with the matching task"
+                f"the session is for task {found!r}, not {task.name!r}; "
+                "open it with the matching task"
             )
         demos = data.get("demos")
         if not isinstance(demos, list):

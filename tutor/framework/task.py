@@ -84,6 +84,11 @@ class Task(ABC):
     def judge(self, trajectories: np.ndarray, conditions: np.ndarray) -> Verdict:
         """Apply the success criteria to trajectories (B, T, d) meant for conditions (B, c)."""
 
+    def nearest_condition(self, condition) -> int:
+        """Index in B^ of the test condition closest to ``condition`` (for replays)."""
+        gap = np.asarray(self.conditions, float) - np.asarray(condition, float)
+        return int(np.argmin(np.linalg.norm(gap.reshape(len(gap), -1), axis=1)))
+
     @abstractmethod
     def demonstrated(self, demo_conditions: np.ndarray) -> np.ndarray:
         """Mask (n_conditions,) of the test conditions that the demos' conditions cover."""
