@@ -27,9 +27,11 @@ import numpy as np
 from .errors import InvalidFileError
 from .fileio import MAX_FILE_BYTES, atomic_write_text, read_json, write_json
 
-__all__ = ["DemoSet", "load_demos", "save_demos", "DEMOS_FORMAT"]
+__all__ = ["DemoSet", "load_demos", "save_demos", "bundled_demos", "BUNDLED_DIR", "DEMOS_FORMAT"]
 
 DEMOS_FORMAT = "lfd-tutor-demos"
+#: where the demonstration sets shipped with the tutor live
+BUNDLED_DIR = Path(__file__).resolve().parents[1] / "assets" / "demos"
 
 
 class DemoSet:
@@ -154,3 +156,12 @@ def _load_csv(path: Path) -> DemoSet:
     if not groups:
         raise InvalidFileError(f"{path.name} holds no samples")
     return DemoSet([np.array(g) for g in groups.values()], columns)
+
+
+def bundled_demos(name: str) -> DemoSet:
+    """A demonstration set shipped in ``assets/demos`` (e.g. ``"maze_good"``)."""
+    path = BUNDLED_DIR / f"{name}.json"
+    if not path.exists():
+        known = ", ".join(sorted(p.stem for p in BUNDLED_DIR.glob("*.json")))
+        raise InvalidFileError(f"no bundled demonstration set {name!r}; choose one of: {known}")
+    return load_demos(path)
