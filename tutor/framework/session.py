@@ -136,6 +136,8 @@ class TeachingSession:
         self._history: list[FeedbackRecord] = []
         self._learners: list = []
         self._realisations: list[np.ndarray] = []
+        #: free JSON-ready notes kept in the session file (e.g. the experimental condition)
+        self.meta: dict = {}
         #: what the teacher did: ("add", n_demos after), ("undo", n_demos after),
         #: ("remove", number removed) or ("reset", 0)
         self.events: list[tuple[str, int]] = []
@@ -342,6 +344,7 @@ class TeachingSession:
             ],
             "records": [r.to_dict() for r in self._history],
             "events": [list(e) for e in self.events],
+            "meta": self.meta,
         }
 
     @classmethod
@@ -382,6 +385,10 @@ class TeachingSession:
                 if not isinstance(demo, list):
                     raise InvalidFileError(f"demo {i + 1} in the session is not a table of numbers")
                 session.add_demo(demo, shown=sel)
+            meta = data.get("meta", {})
+            if not isinstance(meta, dict):
+                raise InvalidFileError("the session's 'meta' entry must be an object")
+            session.meta = meta
         except InvalidFileError:
             raise
         except (TutorError, TypeError, ValueError) as exc:
