@@ -24,12 +24,13 @@ import numpy as np
 from ..demofiles import load_demos
 from ..errors import InvalidFileError, TutorError
 from ..framework import TeachingSession
+from ..runtime import headless
 from ..tasks.maze import MazeTask
 from ..tasks.maze_rules import advise, followed
 from .sketchpad import Sketchpad, layout_spec
 from .text import session_report, summary
 
-__all__ = ["MazeTutor", "CONDITIONS"]
+__all__ = ["MazeTutor", "CONDITIONS", "PAPER_MEDIAN_ETA", "compare_runs", "plot_runs"]
 
 CONDITIONS = {"NF": "none", "VF": "all", "VR": "all"}
 PAPER_MEDIAN_ETA = {"NF": 0.076, "VF": 0.134, "VR": 0.14}
@@ -283,7 +284,92 @@ class MazeTutor:
             parts.append(f"<div class='lfd-message'>{html.escape(self.message)}</div>")
         return "".join(parts)
 
+    def autoplay(self, demos, finish: bool = True) -> None:
+        """Headless runs only (``TUTOR_HEADLESS=1``): feed ``demos`` as strokes, then finish.
+
+        Does nothing when a person runs the notebook, and nothing on a run that was
+        already finished (e.g. resumed).
+        """
+        if not headless() or self.finished:
+            return
+        for demo in demos:
+            self.pad.draw(demo)
+        if finish:
+            self.finish()
+
     def _ipython_display_(self):
         from IPython.display import display
 
         display(self.widget)
+
+
+def compare_runs(tutors) -> str:
+    """The trainee's eta per condition beside the paper's medians, with an honest reading.
+
+    Parameters
+    ----------
+    tutors : sequence of MazeTutor
+        The runs (typically NF, VF and VR).
+    """
+    rows, eta = [], {}
+    for t in tutors:
+        if t.session.n_demos == 0:
+            rows.append(f"{t.condition}: no demonstrations yet")
+            continue
+        score = t.session.score()
+        eta[t.condition] = score.efficiency
+        reach = (
+            f"90 % after {score.n_demos} demos"
+            if score.reached
+            else f"90 % not reached ({score.efficacy:.0%} after {score.n_demos} demos)"
+        )
+        rows.append(
+            f"{t.condition}: eta = {score.efficiency:.1%} ({reach}); "
+            f"paper's median {PAPER_MEDIAN_ETA[t.condition]:.1%}"
+        )
+    text = "\n".join(rows)
+    if {"NF", "VF", "VR"} <= eta.keys():
+        feedback_best = max(eta["VF"], eta["VR"])
+        if eta["NF"] < feedback_best:
+            text += (
+                "\n\nAs in the paper, you taught more efficiently when you could see what the "
+                f"robot had learned ({feedback_best / max(eta['NF'], 1e-9):.1f} times your NF "
+                "efficiency; the paper's median trainee gained about 1.8 times)."
+            )
+        else:
+            text += (
+                "\n\nUnlike the paper's median trainee, feedback did not make your teaching more "
+                "efficient: 7 of the paper's 30 trainees also did well without feedback."
+            )
+    text += (
+        "\n\nA caution: this is one person and one attempt per condition, always in the order "
+        "NF, VF, VR, so practice helps the later runs too; the paper needed 30 trainees to "
+        "show the effect (F(2,58) = 7.95, p = 0.001) and found VF and VR alike (p = 0.80)."
+    )
+    return text
+
+
+def plot_runs(tutors, ax=None):
+    """Bar chart of the trainee's eta per condition with the paper's medians marked."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 3.5))
+    names = [t.condition for t in tutors]
+    mine = [100 * t.session.score().efficiency if t.session.n_demos else 0.0 for t in tutors]
+    x = np.arange(len(names))
+    ax.bar(x, mine, width=0.55, color="#1f4e9c", label="you")
+    ax.scatter(
+        x,
+        [100 * PAPER_MEDIAN_ETA[n] for n in names],
+        marker="_",
+        s=900,
+        linewidths=3,
+        color="#d95f02",
+        label="paper's median",
+        zorder=3,
+    )
+    ax.set_xticks(x, names)
+    ax.set_ylabel("teaching efficiency η (%)")
+    ax.legend(frameon=False)
+    return ax
