@@ -19,6 +19,7 @@ function render({ model, el }) {
   const ctx = canvas.getContext("2d");
   let stroke = null;
   let strokeReleasedAt = null;
+  let renderIdAtRelease = 0;
 
   function geometry() {
     const lay = model.get("layout");
@@ -120,10 +121,16 @@ function render({ model, el }) {
     }
     root.dataset.renderId = String(model.get("render_id"));
     root.dataset.nDemos = String(model.get("demos").length);
-    if (strokeReleasedAt !== null && model.get("render_id") > Number(root.dataset.renderedFor || -1)) {
-      root.dataset.latencyMs = (performance.now() - strokeReleasedAt).toFixed(1);
-      root.dataset.renderedFor = String(model.get("render_id"));
+    // Latency: from pointer release to the first painted frame showing Python's answer
+    // (a render_id newer than the one on screen at release).
+    if (strokeReleasedAt !== null && model.get("render_id") > renderIdAtRelease) {
+      const releasedAt = strokeReleasedAt;
+      const nDemos = model.get("demos").length;
       strokeReleasedAt = null;
+      requestAnimationFrame(() => {
+        root.dataset.latencyMs = (performance.now() - releasedAt).toFixed(1);
+        root.dataset.latencyFor = String(nDemos);
+      });
     }
   }
 
@@ -155,6 +162,7 @@ function render({ model, el }) {
     const done = stroke;
     stroke = null;
     strokeReleasedAt = performance.now();
+    renderIdAtRelease = model.get("render_id");
     model.set("stroke", done);
     model.set("stroke_count", model.get("stroke_count") + 1);
     model.save_changes();
