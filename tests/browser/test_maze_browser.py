@@ -66,7 +66,8 @@ def colour_counts(pad) -> dict:
     return pad.locator("canvas").evaluate(
         """(c) => {
           const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-          const near = (i, r, g, b) => Math.abs(d[i]-r) + Math.abs(d[i+1]-g) + Math.abs(d[i+2]-b) < 60;
+          const near = (i, r, g, b) =>
+            Math.abs(d[i] - r) + Math.abs(d[i + 1] - g) + Math.abs(d[i + 2] - b) < 60;
           let green = 0, red = 0;
           for (let i = 0; i < d.length; i += 4) {
             if (near(i, 0x1b, 0x9e, 0x77)) green++;
