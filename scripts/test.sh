@@ -6,10 +6,26 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 # system packages needed by browser tests are installed here
+# The browser tests drive Debian's chromium (playwright uses it; it downloads no browser).
+if ! command -v chromium >/dev/null 2>&1; then
+    if [[ "$(id -u)" -eq 0 ]] && command -v apt-get >/dev/null 2>&1; then
+        echo "lfd-tutor: installing Debian's chromium for the browser tests" >&2
+        apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+    else
+        echo "lfd-tutor: the browser tests need Debian's chromium;" \
+             "run 'sudo apt-get install chromium' and try again." >&2
+        exit 1
+    fi
+fi
 
 source scripts/env.sh
 
 export TUTOR_HEADLESS=1
+# teaching runs saved by the notebooks go to a throwaway folder, never a trainee's
+TUTOR_SESSION_DIR="$(mktemp -d)"
+export TUTOR_SESSION_DIR
+trap 'rm -rf "$TUTOR_SESSION_DIR"' EXIT
 export MPLBACKEND=Agg
 
 ruff_status=0
