@@ -1,0 +1,244 @@
+"""The matplotlib pictures of tutor.views: they draw, and they draw the right things."""
+
+from __future__ import annotations
+
+import ast
+import os
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
+from matplotlib.colors import to_rgb  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+import tutor.views.teaching as teaching_module  # noqa: E402
+from tutor.framework import TeachingSession  # noqa: E402
+from tutor.tasks.maze import MazeTask  # noqa: E402
+from tutor.views import (  # noqa: E402
+    draw_maze,
+    feedback_figure,
+    plot_feedback,
+    plot_grid_status,
+    plot_progress,
+    plot_set_diagram,
+    realisations_at,
+    set_counts,
+)
+from tutor.views.style import DEMO, FAIL, PASS  # noqa: E402
+
+STARTS = [(0.02, 0.03), (0.18, 0.03), (0.10, 0.03)]
+BATCH = [0, 19, 70, 120, 139]  # corners and centre of the 20 x 7 grid
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    plt.close("all")
+
+
+@pytest.fixture(scope="module")
+def task():
+    return MazeTask()
+
+
+def _teach(task, feedback="all", **kw):
+    rng = np.random.default_rng(0)
+    session = TeachingSession(task, feedback=feedback, **kw)
+    for start in STARTS:
+        session.add_demo(task.layout.reference_path(start, rng, jitter=0.003))
+    return session
+
+
+def _straight_to_target(layout, start=(0.02, 0.03)):
+    """An incorrect demo: a straight line from ``start`` to the target, through obstacle 1."""
+    demo = layout.reference_path(start) * [1, 1, 1]
+    t = demo[:, 0]
+    demo[:, 1:] = np.asarray(start) + t[:, None] * (layout.target_center - np.asarray(start))
+    return demo
+
+
+@pytest.fixture(scope="module")
+def vf(task):
+    return _teach(task)
+
+
+@pytest.fixture(scope="module")
+def nf(task):
+    return _teach(task, feedback="none")
+
+
+@pytest.fixture(scope="module")
+def bf(task):
+    return _teach(task, feedback="batch", batch=BATCH)
+
+
+@pytest.fixture(scope="module")
+def with_incorrect(task):
+    session = _teach(task)
+    record = session.add_demo(_straight_to_target(task.layout))
+    assert not record.demo_passed and "incorrect" in record.kinds
+    return session
+
+
+def _pixels(fig, ax=None):
+    """RGB pixels (H, W, 3) of the rendered figure, cropped to ``ax`` when given."""
+    fig.canvas.draw()
+    rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(int)
+    if ax is None:
+        return rgb
+    box = ax.get_window_extent()
+    height = rgb.shape[0]
+    x0, x1 = int(box.x0) + 2, int(box.x1) - 2
+    y0, y1 = height - int(box.y1) + 2, height - int(box.y0) - 2
+    return rgb[y0:y1, x0:x1]
+
+
+def _count(rgb, colour):
+    """Pixels of the hue family of ``colour`` (lines are thin, faint and antialiased,
+    so exact colours are rare): green for PASS, orange-red for FAIL, blue for DEMO."""
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    masks = {
+        PASS: (g - r > 60) & (g > b),
+        FAIL: (r - b > 100) & (r - g > 50),
+        DEMO: (b - r > 90) & (b - g > 40),
+    }
+    return int(masks[colour].sum())
+
+
+def _realisation_segments(ax, min_width=0.0):
+    """Number of realisation paths drawn (NaN-separated) in the pass/fail colours."""
+    n = 0
+    for line in ax.get_lines():
+        if to_rgb(line.get_color()) in (to_rgb(PASS), to_rgb(FAIL)):
+            if line.get_linewidth() >= min_width:
+                n += int(np.isnan(np.asarray(line.get_xdata(), dtype=float)).sum())
+    return n
+
+
+def _demo_lines(ax):
+    return [
+        line
+        for line in ax.get_lines()
+        if to_rgb(line.get_color()) == to_rgb(DEMO) and len(line.get_xdata()) > 2
+    ]
+
+
+def test_draw_maze_axes_in_cm(task):
+    ax = draw_maze(layout=task.layout)
+    assert isinstance(ax, Axes)
+    assert ax.get_aspect() == 1.0
+    assert ax.xaxis.get_major_formatter()(0.05, 0) == "5"
+    assert ax.get_title() == ""
+    ax2 = draw_maze(ax)  # default layout, given axes
+    assert ax2 is ax
+
+
+def test_feedback_shows_green_red_and_blue(vf):
+    record = vf.latest
+    assert record.passed.any() and not record.passed.all()
+    ax = plot_feedback(vf)
+    assert isinstance(ax, Axes)
+    rgb = _pixels(ax.figure, ax)
+    assert _count(rgb, PASS) > 50
+    assert _count(rgb, FAIL) > 50
+    assert _count(rgb, DEMO) > 50
+    assert _realisation_segments(ax) == len(vf.task.conditions)
+    assert len(_demo_lines(ax)) == 3
+    numbers = {t.get_text() for t in ax.texts}
+    assert {"1", "2", "3"} <= numbers
+
+
+def test_no_feedback_draws_no_realisations(nf):
+    ax = plot_feedback(nf)
+    rgb = _pixels(ax.figure)
+    assert _count(rgb, PASS) == 0
+    assert _count(rgb, FAIL) == 0
+    assert _count(rgb, DEMO) > 50
+    assert _realisation_segments(ax) == 0
+    assert any("no feedback shown" in t.get_text() for t in ax.texts)
+    # the educator's view reveals R^ even though the teacher saw nothing
+    revealed = plot_feedback(nf, reveal=True)
+    assert _realisation_segments(revealed) == len(nf.task.conditions)
+
+
+def test_batch_feedback_and_reveal(bf):
+    ax = plot_feedback(bf)
+    assert _realisation_segments(ax) == len(BATCH)
+    ax = plot_feedback(bf, reveal=True)
+    n = len(bf.task.conditions)
+    assert _realisation_segments(ax) == n
+    assert _realisation_segments(ax, min_width=1.5) == len(BATCH)  # r highlighted
+
+
+def test_past_step_uses_that_learner(vf):
+    task = vf.task
+    first = realisations_at(vf, 0)
+    expected, _ = vf._learners[0].reproduce_batch(task.frame_batch(task.conditions), task.times)
+    np.testing.assert_allclose(first, expected)
+    assert realisations_at(vf, -1) is vf.realisations
+    ax = plot_feedback(vf, step=0)
+    assert len(_demo_lines(ax)) == 1
+    with pytest.raises(IndexError):
+        plot_feedback(vf, step=3)
+
+
+def test_grid_status_counts_add_up(with_incorrect):
+    record = with_incorrect.latest
+    ax = plot_grid_status(with_incorrect)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert f"covered (passes): {int(record.passed.sum())}" in labels
+    assert f"undemonstrated: {record.n_undemonstrated}" in labels
+    assert "incorrect demo start: 1" in labels
+    status = [lab for lab in labels if lab.startswith(("covered", "demonstrated,", "undem"))]
+    assert sum(int(lab.rsplit(": ", 1)[1]) for lab in status) == len(record.passed)
+
+
+def test_progress_one_point_per_demo(with_incorrect):
+    ax = plot_progress(with_incorrect)
+    m = with_incorrect.n_demos
+    lines = {line.get_gid(): line for line in ax.get_lines() if line.get_gid()}
+    np.testing.assert_array_equal(lines["efficacy"].get_xdata(), np.arange(1, m + 1))
+    np.testing.assert_allclose(
+        lines["efficacy"].get_ydata(), [r.efficacy for r in with_incorrect.history]
+    )
+    assert len(lines["efficiency"].get_xdata()) == m
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(lab.startswith("incorrect demo") for lab in labels)
+    crosses = [line for line in ax.get_lines() if line.get_marker() == "x"]
+    assert crosses and m in np.asarray(crosses[0].get_xdata())
+
+
+def test_set_diagram_labels_the_counts(with_incorrect):
+    c = set_counts(with_incorrect)
+    ax = plot_set_diagram(with_incorrect)
+    text = "\n".join(t.get_text() for t in ax.texts)
+    assert f"R ∩ B: {c['covered']} covered" in text
+    assert f"{c['undemonstrated']}" in text and "undemonstrated" in text
+    assert f"incorrect demos (b ∖ B): {c['incorrect']}" in text
+    assert c["incorrect"] == 1
+    assert f"demonstrated (b ∩ B): {c['demonstrated']}" in text
+    assert f"{c['n']} start points" in text
+    assert c["covered"] + c["failed"] == c["n"]
+
+
+def test_feedback_figure_and_empty_session(vf, task):
+    fig = feedback_figure(vf)
+    assert isinstance(fig, Figure) and len(fig.axes) == 4
+    empty = TeachingSession(task)
+    for draw in (plot_feedback, plot_grid_status, plot_progress, plot_set_diagram):
+        assert isinstance(draw(empty), Axes)
+
+
+def test_teaching_views_are_task_agnostic():
+    tree = ast.parse(open(teaching_module.__file__, encoding="utf-8").read())
+    names = [node.module or "" for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)] + [
+        a.name for node in ast.walk(tree) if isinstance(node, ast.Import) for a in node.names
+    ]
+    assert not any("tasks" in name for name in names)
