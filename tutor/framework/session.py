@@ -172,6 +172,12 @@ class TeachingSession:
         """R^ after the latest demo: mean trajectories (n, T, d), or None."""
         return self._realisations[-1] if self._realisations else None
 
+    def realisations_at(self, step: int = -1) -> np.ndarray:
+        """R^ (n, T, d) after demo ``step + 1`` (an index into :attr:`history`)."""
+        if not self._realisations:
+            raise InvalidParameterError("no demo yet, so the robot has realised nothing")
+        return self._realisations[step]
+
     def score(self, target: float = 0.9) -> SessionScore:
         """The paper's score: demos to first reach ``target`` coverage and eta there."""
         return session_score([r.efficacy for r in self._history], target)

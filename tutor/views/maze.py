@@ -192,17 +192,11 @@ def realisations_at(session, step=-1):
 
     Notes
     -----
-    The session keeps only the latest R^; for an earlier step the realisations
-    are recomputed from the learner the session stored after that demo.
     """
     i = _step_index(session, step)
     if i is None:
         return None
-    if i == len(session.history) - 1 and session.realisations is not None:
-        return session.realisations
-    task = session.task
-    mean, _ = session._learners[i].reproduce_batch(task.frame_batch(task.conditions), task.times)
-    return mean
+    return session.realisations_at(i)
 
 
 def _label_positions(points, min_gap=0.011):
