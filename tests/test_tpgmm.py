@@ -7,11 +7,11 @@ import copy
 import numpy as np
 import pytest
 import scipy.io
-from conftest import maze_demos, shared_file
 from gmr import GMM
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from tests.helpers import maze_demos, shared_file
 from tutor.errors import (
     DemoFrameMismatchError,
     InvalidDemoError,
