@@ -313,3 +313,18 @@ def test_saving_over_a_session_replaces_it_whole(task, tmp_path):
     s.add_demo(demo_from(task, (0.17, 0.03)))
     s.save(path)
     assert len(json.loads(path.read_text())["demos"]) == 2
+
+
+def test_explicit_condition_is_kept_and_round_trips(task, tmp_path):
+    s = TeachingSession(task)
+    demo = demo_from(task, (0.03, 0.03))
+    s.add_demo(demo, condition=[0.031, 0.029])
+    np.testing.assert_allclose(s.conditions[0], [0.031, 0.029])
+    with pytest.raises(InvalidParameterError, match="condition"):
+        s.add_demo(demo, condition=[0.1, 0.2, 0.3])
+    with pytest.raises(InvalidParameterError, match="condition"):
+        s.add_demo(demo, condition=[np.nan, 0.2])
+    assert s.n_demos == 1
+    loaded = TeachingSession.load(s.save(tmp_path / "s.json"), task)
+    np.testing.assert_allclose(loaded.conditions[0], [0.031, 0.029])
+    assert loaded.latest.efficacy == s.latest.efficacy

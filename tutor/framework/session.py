@@ -133,6 +133,7 @@ class TeachingSession:
         self.batch = batch
         self._fresh_learner = learner if learner is not None else task.make_learner()
         self._demos: list[np.ndarray] = []
+        self._conditions: list[np.ndarray] = []
         self._history: list[FeedbackRecord] = []
         self._learners: list = []
         self._realisations: list[np.ndarray] = []
@@ -143,6 +144,16 @@ class TeachingSession:
         self.events: list[tuple[str, int]] = []
 
     # ---------------------------------------------------------------- state
+
+    @property
+    def _stacks(self) -> tuple[list, ...]:
+        """The per-demo lists, kept the same length."""
+        return (self._demos, self._conditions, self._learners, self._realisations, self._history)
+
+    @property
+    def conditions(self) -> list[np.ndarray]:
+        """The condition each demo was given under (copies)."""
+        return [c.copy() for c in self._conditions]
 
     @property
     def demos(self) -> list[np.ndarray]:
@@ -184,7 +195,7 @@ class TeachingSession:
 
     # ---------------------------------------------------------------- teaching
 
-    def add_demo(self, raw, shown=None) -> FeedbackRecord:
+    def add_demo(self, raw, shown=None, condition=None) -> FeedbackRecord:
         """Add one demonstration and return the feedback after it.
 
         Parameters
@@ -193,6 +204,9 @@ class TeachingSession:
             A recording the task's ``preprocess`` accepts (e.g. (T, 3) of t, x, y).
         shown : sequence of int, optional
             In ``"selected"`` mode: the test conditions the teacher asks to see.
+        condition : array-like, optional
+            The condition the teacher meant to demonstrate (e.g. the plant they chose);
+            by default the task reads it off the demo (``task.condition_of``).
 
         Raises
         ------
@@ -201,12 +215,15 @@ class TeachingSession:
         """
         task = self.task
         demo = task.preprocess(raw)
+        cond = self._check_condition(demo, condition)
         selected = self._check_shown(shown)
         demos = [*self._demos, demo]
+        conds = [*self._conditions, cond]
         learner = copy.deepcopy(self.learner)
-        learner.fit(demos, [task.frames(task.condition_of(d)) for d in demos])
-        record, realisations = self._evaluate(learner, demos, selected)
+        learner.fit(demos, [task.frames(c) for c in conds])
+        record, realisations = self._evaluate(learner, demos, conds, selected)
         self._demos.append(demo)
+        self._conditions.append(cond)
         self._learners.append(learner)
         self._realisations.append(realisations)
         self._history.append(record)
@@ -217,7 +234,7 @@ class TeachingSession:
         """Remove the latest demo; returns the record now current (None if no demo is left)."""
         if not self._demos:
             raise InvalidParameterError("there is no demo to undo")
-        for stack in (self._demos, self._learners, self._realisations, self._history):
+        for stack in self._stacks:
             stack.pop()
         self.events.append(("undo", self.n_demos))
         return self.latest
@@ -234,18 +251,19 @@ class TeachingSession:
         if number == self.n_demos:
             return self.undo()
         later = self._demos[number:]
+        later_conditions = self._conditions[number:]
         shown = [r.shown for r in self._history[number:]]
-        for stack in (self._demos, self._learners, self._realisations, self._history):
+        for stack in self._stacks:
             del stack[number - 1 :]
-        for demo, sel in zip(later, shown, strict=True):
-            self.add_demo(demo, shown=sel if self.feedback == "selected" else None)
+        for demo, cond, sel in zip(later, later_conditions, shown, strict=True):
+            self.add_demo(demo, shown=sel if self.feedback == "selected" else None, condition=cond)
             self.events.pop()
         self.events.append(("remove", number))
         return self.latest
 
     def reset(self) -> None:
         """Remove every demo."""
-        for stack in (self._demos, self._learners, self._realisations, self._history):
+        for stack in self._stacks:
             stack.clear()
         self.events.append(("reset", 0))
 
@@ -260,28 +278,41 @@ class TeachingSession:
             raise InvalidParameterError(f"shown indices must lie in 0..{n - 1}")
         return idx
 
-    def _evaluate(self, learner, demos, selected):
+    def _check_condition(self, demo, condition) -> np.ndarray:
+        task = self.task
+        if condition is None:
+            return np.asarray(task.condition_of(demo), dtype=float)
+        cond = np.asarray(condition, dtype=float)
+        expected = np.asarray(task.conditions).shape[1:]
+        if cond.shape != expected or not np.all(np.isfinite(cond)):
+            raise InvalidParameterError(
+                f"condition must be a finite array of shape {expected} like the rows of "
+                f"task.conditions, got {condition!r}"
+            )
+        return cond
+
+    def _evaluate(self, learner, demos, conds, selected):
         task, thr = self.task, self.thresholds
         conditions = task.conditions
+        context = task.criteria_context(demos, np.array(conds))
         mean, _ = learner.reproduce_batch(task.frame_batch(conditions), task.times)
-        verdict = task.judge(mean, conditions)
+        verdict = task.judge(mean, conditions, context)
         demo = demos[-1]
-        own = task.judge(demo[None, :, 1:], task.condition_of(demo)[None])
+        own = task.judge_demo(demo, conds[-1], context)
         m = len(demos)
         eps = efficacy(verdict.passed)
         previous = self._history[-1].efficacy if self._history else 0.0
         delta = eps - previous
         sim, nearest = similarity(demo, demos[:-1])
-        correct = [d for d, r in zip(demos[:-1], self._history, strict=True) if r.demo_passed]
-        if own.passed[0]:
-            correct.append(demo)
+        ok = [r.demo_passed for r in self._history] + [bool(own.passed[0])]
+        correct = [c for c, good in zip(conds, ok, strict=True) if good]
         demonstrated = (
-            task.demonstrated(np.array([task.condition_of(d) for d in correct]))
+            task.demonstrated(np.array(correct))
             if correct
             else np.zeros(len(conditions), dtype=bool)
         )
         undemonstrated = ~verdict.passed & ~demonstrated
-        shown = self._shown(demo, selected)
+        shown = self._shown(conds[-1], selected)
         delta_a = thr.ambiguity_distance
         if delta_a is None:
             delta_a = task.ambiguity_distance
@@ -321,14 +352,14 @@ class TeachingSession:
         )
         return record, mean
 
-    def _shown(self, demo, selected) -> np.ndarray:
+    def _shown(self, condition, selected) -> np.ndarray:
         n = len(self.task.conditions)
         if self.feedback == "all":
             return np.arange(n)
         if self.feedback == "batch":
             return self.batch.copy()
         if self.feedback == "replay":
-            return np.array([self.task.nearest_condition(self.task.condition_of(demo))])
+            return np.array([self.task.nearest_condition(condition)])
         if self.feedback == "selected":
             return selected
         return np.zeros(0, dtype=int)
@@ -345,6 +376,7 @@ class TeachingSession:
             "batch": self.batch.tolist(),
             "thresholds": self.thresholds.to_dict(),
             "demos": [d.tolist() for d in self._demos],
+            "conditions": [c.tolist() for c in self._conditions],
             "shown": [
                 r.shown.tolist() if self.feedback == "selected" else None for r in self._history
             ],
@@ -376,6 +408,9 @@ class TeachingSession:
         if not isinstance(demos, list):
             raise InvalidFileError("the session has no list of 'demos'")
         shown = data.get("shown") or [None] * len(demos)
+        conditions = data.get("conditions") or [None] * len(demos)
+        if not isinstance(conditions, list) or len(conditions) != len(demos):
+            raise InvalidFileError("the session's 'conditions' list does not match its demos")
         if not isinstance(shown, list) or len(shown) != len(demos):
             raise InvalidFileError("the session's 'shown' list does not match its demos")
         try:
@@ -387,10 +422,10 @@ class TeachingSession:
                 thresholds=thresholds,
                 batch=data.get("batch") or None,
             )
-            for i, (demo, sel) in enumerate(zip(demos, shown, strict=True)):
+            for i, (demo, sel, cond) in enumerate(zip(demos, shown, conditions, strict=True)):
                 if not isinstance(demo, list):
                     raise InvalidFileError(f"demo {i + 1} in the session is not a table of numbers")
-                session.add_demo(demo, shown=sel)
+                session.add_demo(demo, shown=sel, condition=cond)
             meta = data.get("meta", {})
             if not isinstance(meta, dict):
                 raise InvalidFileError("the session's 'meta' entry must be an object")

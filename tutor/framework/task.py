@@ -80,9 +80,26 @@ class Task(ABC):
     def condition_of(self, demo: np.ndarray) -> np.ndarray:
         """The condition a (preprocessed) demo was given under."""
 
+    def criteria_context(self, demos, conditions):
+        """Anything the criteria derive from the demo set (e.g. thresholds); default None.
+
+        Parameters
+        ----------
+        demos : list of ndarray (T, 1 + d)
+        conditions : ndarray (M, c)
+        """
+        return None
+
     @abstractmethod
-    def judge(self, trajectories: np.ndarray, conditions: np.ndarray) -> Verdict:
-        """Apply the success criteria to trajectories (B, T, d) meant for conditions (B, c)."""
+    def judge(self, trajectories: np.ndarray, conditions: np.ndarray, context=None) -> Verdict:
+        """Apply the success criteria to trajectories (B, T, d) meant for conditions (B, c).
+
+        ``context`` is what :meth:`criteria_context` returned for the current demos.
+        """
+
+    def judge_demo(self, demo: np.ndarray, condition, context=None) -> Verdict:
+        """Whether a demo (T, 1 + d) is a correct example for ``condition`` (b in B)."""
+        return self.judge(demo[None, :, 1:], np.asarray(condition)[None], context)
 
     def nearest_condition(self, condition) -> int:
         """Index in B^ of the test condition closest to ``condition`` (for replays)."""

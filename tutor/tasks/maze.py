@@ -285,7 +285,7 @@ class MazeTask(Task):
 
     # ---------------------------------------------------------------- criteria
 
-    def judge(self, trajectories: np.ndarray, conditions=None) -> Verdict:
+    def judge(self, trajectories: np.ndarray, conditions=None, context=None) -> Verdict:
         """Criteria (i)-(iii) for trajectories (B, T, 2), with the reason for each failure."""
         traj = np.asarray(trajectories, dtype=float)
         lay = self.layout
