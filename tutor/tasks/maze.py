@@ -31,11 +31,11 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import make_interp_spline
 
 from ..errors import InvalidDemoError
 from ..framework.task import Task, Verdict
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
+from .paths import minimum_jerk_through
 
 __all__ = ["Box", "MazeLayout", "MazeTask", "load_layout", "DEFAULT_LAYOUT_PATH"]
 
@@ -151,16 +151,8 @@ class MazeLayout:
             rng = np.random.default_rng(rng)
             guides = guides + rng.normal(scale=jitter, size=guides.shape)
         pts = np.vstack([np.asarray(start, dtype=float), guides, self.target_center])
-        chord = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))]
-        spline = make_interp_spline(chord / chord[-1], pts, k=3, bc_type="natural")
-        dense_u = np.linspace(0.0, 1.0, 2000)
-        dense = spline(dense_u)
-        arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(dense, axis=0), axis=1))]
+        xy = minimum_jerk_through(pts, n)
         tau = np.linspace(0.0, 1.0, n)
-        progress = 10 * tau**3 - 15 * tau**4 + 6 * tau**5  # minimum-jerk profile
-        u = np.interp(progress * arc[-1], arc, dense_u)
-        xy = spline(u)
-        xy[0], xy[-1] = pts[0], pts[-1]
         return np.column_stack([tau, xy])
 
 

@@ -14,8 +14,9 @@ delta_g, delta_r
 A state is :math:`\xi = (t, x, y, z, g)`: normalised time, the gripper (tool centre
 point) position in the robot base frame in metres, and the hand g (1 closed, 0 open).
 The gripper keeps pointing down, so orientation is not part of the state. The TP-GMM
-sees three frames per condition: the start pose, the target plant and the bin, with
-K = 7 components. The scene lives in ``assets/pickplace.json``.
+sees three frames per condition: the start pose, the target plant and the bin. The
+paper used K = 7; the tutor uses 9 (see ``_learner`` in ``assets/pickplace.json``,
+where the scene and the learner settings live).
 """
 
 from __future__ import annotations
@@ -27,7 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["PickPlaceScene", "load_scene", "DEFAULT_SCENE_PATH"]
+from ..errors import InvalidDemoError
+from ..framework.task import Task, Verdict
+from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
+from .paths import minimum_jerk_through
+
+__all__ = ["PickPlaceScene", "PickPlaceTask", "load_scene", "start_position", "DEFAULT_SCENE_PATH"]
 
 DEFAULT_SCENE_PATH = Path(__file__).resolve().parents[2] / "assets" / "pickplace.json"
 
@@ -54,7 +60,9 @@ class PickPlaceScene:
     bin_wall: float
     release_height: float  # release point height (z)
     generalisation_plants: tuple[tuple[int, int], ...]
-    n_components: int = 7
+    n_components: int = 9
+    reg_covar: float = 1e-4
+    warm_start: bool = False
     n_samples: int = 200
     realisation_seconds: float = 25.0
     run_seconds: float = 900.0
@@ -110,8 +118,362 @@ def load_scene(path=None) -> PickPlaceScene:
         bin_wall=float(bin_["wall"]),
         release_height=float(bin_["release_height"]),
         generalisation_plants=tuple(tuple(p) for p in data["generalisation_plants"]),
-        n_components=int(data.get("n_components", 7)),
+        n_components=int(data.get("n_components", 9)),
+        reg_covar=float(data.get("reg_covar", 1e-4)),
+        warm_start=bool(data.get("warm_start", False)),
         n_samples=int(data.get("n_samples", 200)),
         realisation_seconds=float(data.get("realisation_seconds", 25.0)),
         run_seconds=float(data.get("run_seconds", 900.0)),
     )
+
+
+# --- the task ------------------------------------------------------------------------------
+
+GRAB_LEVEL = 0.5  # the hand counts as closed when g >= 0.5
+
+
+def _first(mask: np.ndarray) -> np.ndarray:
+    """Index of the first True along the last axis, or -1 where there is none."""
+    idx = np.argmax(mask, axis=-1)
+    return np.where(mask.any(axis=-1), idx, -1)
+
+
+def start_position(scene: PickPlaceScene) -> np.ndarray:
+    """The tool centre point at the start configuration (forward kinematics), shape (3,)."""
+    import pinocchio as pin
+
+    from ..robot import load_robot
+
+    robot = load_robot(scene.robot)
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, scene.start_configuration)
+    return data.oMf[robot.model.getFrameId(scene.tool_frame)].translation.copy()
+
+
+class PickPlaceTask(Task):
+    """Experiment 2 as a :class:`~tutor.framework.Task`.
+
+    Conditions are the plants' grasp points (100, 3). A trajectory (T, 4) of
+    (x, y, z, g) is in B iff (i) it stays in X (above the table and tray, and
+    inside the arm's collision-free reachable workspace when a feasibility map is
+    given), (ii) the hand closes within delta_g of the plant and (iii) opens again
+    within delta_r of the release point over the bin.
+
+    Parameters
+    ----------
+    scene : PickPlaceScene, optional
+    feasibility : object with ``contains(points (..., 3)) -> bool (...)``, optional
+        The arm's reachable, collision-free workspace (see :mod:`tutor.robot`).
+    """
+
+    name = "pickplace"
+    condition_noun = "plant"
+    condition_noun_plural = "plants"
+    ambiguity_distance = 0.01
+    #: a recording whose gripper path is shorter than this (m) is junk
+    min_path_length = 0.05
+
+    def __init__(self, scene: PickPlaceScene | None = None, feasibility=None):
+        self.scene = load_scene() if scene is None else scene
+        self.feasibility = feasibility
+        self.start = start_position(self.scene)
+        self._times = np.linspace(0.0, 1.0, self.scene.n_samples)
+        self._conditions = self.scene.plant_positions
+        self._batch = self.frame_batch(self._conditions)
+
+    @property
+    def conditions(self) -> np.ndarray:
+        return self._conditions
+
+    @property
+    def times(self) -> np.ndarray:
+        return self._times
+
+    def frames(self, condition) -> list[Frame]:
+        eye = np.eye(4)
+        pad = [0.0]
+        return [
+            Frame(eye, np.r_[self.start, pad]),
+            Frame(eye, np.r_[np.asarray(condition, float), pad]),
+            Frame(eye, np.r_[self.scene.release_point, pad]),
+        ]
+
+    def frame_batch(self, conditions) -> FrameBatch:
+        if conditions is getattr(self, "_conditions", None) and hasattr(self, "_batch"):
+            return self._batch
+        plants = np.asarray(conditions, float).reshape(-1, 3)
+        B = plants.shape[0]
+        b = np.zeros((B, 3, 4))
+        b[:, 0, :3] = self.start
+        b[:, 1, :3] = plants
+        b[:, 2, :3] = self.scene.release_point
+        eye = np.broadcast_to(np.eye(4), (B, 3, 4, 4)).copy()
+        return FrameBatch(eye, eye.copy(), b)
+
+    def make_learner(self) -> TPGMM:
+        sc = self.scene
+        return TPGMM(sc.n_components, reg_covar=sc.reg_covar, warm_start=sc.warm_start)
+
+    def format_distance(self, distance: float) -> str:
+        return f"{100 * distance:.1f} cm"
+
+    def condition_of(self, demo) -> np.ndarray:
+        """The plant nearest to where the hand first closes (when no choice was recorded)."""
+        demo = np.asarray(demo)
+        k = _first(demo[:, 4] >= GRAB_LEVEL)
+        grab = demo[k if k >= 0 else len(demo) // 2, 1:4]
+        return self._conditions[self.nearest_condition(grab)].copy()
+
+    def plant_name(self, index: int) -> str:
+        r, c = divmod(int(index), self.scene.cols)
+        return f"plant ({r + 1}, {c + 1})"
+
+    # ---------------------------------------------------------------- demos
+
+    def preprocess(self, raw) -> np.ndarray:
+        """Check a recording (t, x, y, z, g) in seconds and metres; resample to T samples."""
+        demo = check_demo(raw, "the demonstration", n_columns=5)
+        xyz, g = demo[:, 1:4], demo[:, 4]
+        extent = float(np.abs(xyz).max())
+        if extent > 3.0:
+            unit = (
+                " It looks like millimetres: divide the positions by 1000." if extent < 3000 else ""
+            )
+            raise InvalidDemoError(
+                f"positions reach {extent:.4g}, beyond the arm's reach of about 0.9 m; positions "
+                f"must be in metres.{unit}"
+            )
+        if g.min() < -1e-6 or g.max() > 1 + 1e-6:
+            raise InvalidDemoError(
+                "the hand column (last) must be between 0 (open) and 1 (closed), "
+                f"got values from {g.min():.3g} to {g.max():.3g}"
+            )
+        length = float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).sum())
+        if length < self.min_path_length:
+            raise InvalidDemoError(
+                f"the gripper moved only {100 * length:.1f} cm; a demonstration carries a plant "
+                "from the tray to the bin"
+            )
+        t = demo[:, 0]
+        s = (t - t[0]) / (t[-1] - t[0])
+        cols = [np.interp(self._times, s, demo[:, j]) for j in range(1, 5)]
+        return np.column_stack([self._times, *cols])
+
+    def demonstrate(self, plant: int, rng=None, mistake: str | None = None, rate_hz=20.0):
+        """A kinesthetic-style demonstration to ``plant`` as a person would give it.
+
+        The hand is guided through via points (above the plant, grasp, lift, above the
+        bin, release) with minimum-jerk motion between them, person-to-person
+        variability in the via points and timing, a little hand tremor, and the
+        button pressed (hand closed) at the grasp and released over the bin.
+
+        Parameters
+        ----------
+        plant : int
+            Index of the plant the teacher chose (0 .. 99).
+        mistake : {None, "wrong_plant", "sloppy_grab"}
+            "wrong_plant": the teacher guides the arm to a neighbouring plant;
+            "sloppy_grab": the hand closes 2-3 cm off the plant.
+
+        Returns
+        -------
+        ndarray (T, 5)
+            t (s), x, y, z (m), g (0 open, 1 closed).
+        """
+        sc, rng = self.scene, np.random.default_rng(rng)
+        target = int(plant)
+        if mistake == "wrong_plant":
+            r, c = divmod(target, sc.cols)
+            moves = [
+                (dr, dc)
+                for dr, dc in ((0, 1), (0, -1), (1, 0), (-1, 0))
+                if 0 <= r + dr < sc.rows and 0 <= c + dc < sc.cols
+            ]
+            dr, dc = moves[rng.integers(len(moves))]
+            target = sc.plant_index(r + dr, c + dc)
+        elif mistake not in (None, "sloppy_grab"):
+            raise InvalidDemoError(
+                f"unknown mistake {mistake!r}; use 'wrong_plant' or 'sloppy_grab'"
+            )
+        grasp = sc.plant_positions[target] + rng.normal(0, 0.005, 3)  # hand placement
+        if mistake == "sloppy_grab":
+            angle = rng.uniform(0, 2 * np.pi)
+            grasp = grasp + rng.uniform(0.02, 0.03) * np.array([np.cos(angle), np.sin(angle), 0])
+        release = sc.release_point + np.r_[rng.normal(0, 0.005, 2), rng.normal(0, 0.005)]
+        # A person guiding the arm makes one smooth reach (through a point above the
+        # plant down to the grasp) and one smooth transport (lift, over the bin, down
+        # to the release), pressing the button at each end; one pace per demo.
+        reach = [self.start, grasp + [0, 0, 0.10] + rng.normal(0, 0.005, 3), grasp]
+        carry = [
+            grasp,
+            grasp + [0, 0, 0.15] + rng.normal(0, 0.005, 3),
+            release + [0, 0, 0.06] + rng.normal(0, 0.005, 3),
+            release,
+        ]
+        pace = rng.uniform(0.85, 1.2)
+        pieces, hands, t0 = [], [], 0.0
+        for points, seconds, hand in ((reach, 4.5, 0.0), (carry, 5.5, 1.0)):
+            dur = seconds * pace * rng.uniform(0.95, 1.05)
+            n = max(int(dur * rate_hz), 2)
+            move = minimum_jerk_through(points, n + 1)[:-1]
+            pieces.append(
+                np.column_stack([t0 + np.arange(n) / rate_hz * dur / (n / rate_hz), move])
+            )
+            hands.append(np.full(n, hand))
+            t0 += dur
+            dwell = 0.6 * pace * rng.uniform(0.9, 1.1)  # press (or release) the button, pause
+            m = max(int(dwell * rate_hz), 1)
+            stay = np.tile(points[-1], (m, 1))
+            pieces.append(np.column_stack([t0 + np.arange(m) / rate_hz, stay]))
+            hands.append(np.full(m, 1.0 - hand))
+            t0 += m / rate_hz
+        path = np.concatenate(pieces)
+        g = np.concatenate(hands)
+        tremor = rng.normal(scale=0.001, size=(len(path), 3))
+        kernel = np.hanning(7) / np.hanning(7).sum()
+        tremor = np.column_stack([np.convolve(tremor[:, j], kernel, mode="same") for j in range(3)])
+        return np.column_stack([path[:, 0], path[:, 1:] + tremor, g])
+
+    @staticmethod
+    def duration(raw) -> float:
+        """How long a recorded demonstration took (s): it costs the teacher that much time."""
+        t = np.asarray(raw, float)[:, 0]
+        return float(t[-1] - t[0])
+
+    # ---------------------------------------------------------------- criteria
+
+    def _events(self, traj):
+        """Grab and release sample indices (B,), -1 when missing."""
+        closed = traj[..., 3] >= GRAB_LEVEL
+        grab = _first(closed)
+        after = closed | (np.arange(closed.shape[-1]) <= grab[:, None])
+        release = np.where(grab >= 0, _first(~after), -1)
+        return grab, release
+
+    def criteria_context(self, demos, conditions) -> dict:
+        """delta_g and delta_r: mean demo distance + 2 std + 1 mm (right-plant demos only)."""
+        traj = np.array([d[:, 1:] for d in demos])
+        grab, release = self._events(traj)
+        rows = np.arange(len(demos))
+        grab_d = np.linalg.norm(traj[rows, np.maximum(grab, 0), :3] - conditions, axis=1)
+        rel_d = np.linalg.norm(
+            traj[rows, np.maximum(release, 0), :3] - self.scene.release_point, axis=1
+        )
+        nearest = np.array([self.nearest_condition(p) for p in traj[rows, np.maximum(grab, 0), :3]])
+        own = np.array([self.nearest_condition(c) for c in conditions])
+        use_g = (grab >= 0) & (nearest == own)
+        use_r = release >= 0
+
+        def rule(d, use):
+            d = d[use]
+            return float(d.mean() + 2 * d.std() + 0.001) if d.size else 0.001
+
+        return {"delta_g": rule(grab_d, use_g), "delta_r": rule(rel_d, use_r)}
+
+    def judge(self, trajectories, conditions, context=None) -> Verdict:
+        traj = np.asarray(trajectories, float)
+        ctx = context or {"delta_g": 0.01, "delta_r": 0.02}
+        pos = traj[..., :3]
+        sc = self.scene
+        below_table = pos[..., 2] < 0.0
+        half = sc.tray_size / 2
+        in_tray = np.all(np.abs(pos - sc.tray_center) <= half, axis=-1)
+        bad = below_table | in_tray
+        unreachable = np.zeros_like(bad)
+        if self.feasibility is not None:
+            unreachable = ~self.feasibility.contains(pos)
+            bad = bad | unreachable
+        grab, release = self._events(traj)
+        rows = np.arange(len(traj))
+        grab_d = np.linalg.norm(pos[rows, np.maximum(grab, 0)] - conditions, axis=1)
+        rel_d = np.linalg.norm(pos[rows, np.maximum(release, 0)] - sc.release_point, axis=1)
+        path_ok = ~bad.any(axis=1)
+        grab_ok = (grab >= 0) & (grab_d <= ctx["delta_g"])
+        rel_ok = (release >= 0) & (rel_d <= ctx["delta_r"])
+        passed = path_ok & grab_ok & rel_ok
+        reasons = [""] * len(traj)
+        n = traj.shape[1]
+        for i in np.flatnonzero(~passed):
+            parts = []
+            if not path_ok[i]:
+                k = int(np.argmax(bad[i]))
+                what = (
+                    "went through the table"
+                    if below_table[i, k]
+                    else "hit the tray"
+                    if in_tray[i, k]
+                    else "left the arm's reachable, collision-free workspace"
+                )
+                parts.append(f"{what} at sample {k + 1} of {n}")
+            if grab[i] < 0:
+                parts.append("never closed the hand")
+            elif not grab_ok[i]:
+                parts.append(f"grabbed {self.format_distance(grab_d[i])} from the plant")
+            if grab[i] >= 0 and release[i] < 0:
+                parts.append("never opened the hand over the bin")
+            elif grab[i] >= 0 and not rel_ok[i]:
+                parts.append(f"released {self.format_distance(rel_d[i])} from the bin")
+            reasons[i] = ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1]
+        return Verdict(passed, tuple(reasons))
+
+    def judge_demo(self, demo, condition, context=None) -> Verdict:
+        """A demo is correct when it grabs the chosen plant and releases over the bin."""
+        traj = np.asarray(demo)[None, :, 1:]
+        grab, release = self._events(traj)
+        sc = self.scene
+        chosen = self.nearest_condition(condition)
+        parts = []
+        if (traj[0, :, 2] < 0.0).any():
+            parts.append("went through the table")
+        if grab[0] < 0:
+            parts.append("never closed the hand")
+        else:
+            grabbed = self.nearest_condition(traj[0, grab[0], :3])
+            off = np.linalg.norm(traj[0, grab[0], :3] - sc.plant_positions[grabbed])
+            if grabbed != chosen:
+                parts.append(
+                    f"grabbed {self.plant_name(grabbed)} instead of the chosen "
+                    f"{self.plant_name(chosen)}"
+                )
+            elif off > sc.pitch / 2:
+                parts.append(f"grabbed {self.format_distance(off)} from the plant")
+            if release[0] < 0:
+                parts.append("never opened the hand over the bin")
+            else:
+                p = traj[0, release[0], :3]
+                inside = np.all(np.abs(p[:2] - sc.bin_center[:2]) <= sc.bin_size[:2] / 2)
+                if not inside:
+                    parts.append("released the plant outside the bin")
+        if not parts:
+            return Verdict(np.array([True]), ("",))
+        text = ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1]
+        return Verdict(np.array([False]), (text,))
+
+    # ---------------------------------------------------------------- coverage
+
+    def demonstrated(self, demo_conditions) -> np.ndarray:
+        mask = np.zeros(len(self._conditions), dtype=bool)
+        for c in np.asarray(demo_conditions, float).reshape(-1, 3):
+            mask[self.nearest_condition(c)] = True
+        return mask
+
+    def describe_where(self, mask) -> str:
+        mask = np.asarray(mask, dtype=bool)
+        if mask.all():
+            return "all over the tray"
+        if mask.mean() >= 0.8:
+            return "almost all over the tray"
+        idx = np.flatnonzero(mask)
+        if idx.size == 0:
+            return "nowhere"
+        r, c = np.divmod(idx, self.scene.cols)
+        near = np.mean(r < self.scene.rows / 2)
+        left = np.mean(c >= self.scene.cols / 2)  # larger y is the robot's left
+        words = []
+        if near >= 0.75 or near <= 0.25:
+            words.append("near" if near >= 0.75 else "far")
+        if left >= 0.75 or left <= 0.25:
+            words.append("left" if left >= 0.75 else "right")
+        if not words:
+            return "spread over the tray"
+        return f"mostly on the {' '.join(words)} side of the tray (seen from the robot)"

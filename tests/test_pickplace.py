@@ -1,0 +1,163 @@
+"""The pick-and-place task (Experiment 2): scene, criteria with reasons, the delta rule, demos."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tutor.errors import InvalidDemoError
+from tutor.framework import INCORRECT, TeachingSession
+from tutor.tasks.pickplace import PickPlaceTask
+
+
+@pytest.fixture(scope="module")
+def task():
+    return PickPlaceTask()
+
+
+def carry(task, plant, grab_offset=(0, 0, 0), release_offset=(0, 0, 0), n=200, dip=None):
+    """A hand-made (T, 4) trajectory: start -> plant (close) -> release point (open)."""
+    plant_pos = task.conditions[plant] + np.asarray(grab_offset)
+    rel = task.scene.release_point + np.asarray(release_offset)
+    third = n // 3
+    a = np.linspace(task.start, plant_pos, third)
+    b = np.linspace(plant_pos, rel, third)
+    c = np.tile(rel, (n - 2 * third, 1))
+    pos = np.vstack([a, b, c])
+    g = np.r_[np.zeros(third - 1), np.ones(third + 1), np.zeros(n - 2 * third)]
+    if dip is not None:
+        pos[dip, 2] = -0.01
+    return np.column_stack([pos, g])
+
+
+def as_demo(traj):
+    return np.column_stack([np.linspace(0, 10, len(traj)), traj])
+
+
+def test_scene_matches_the_paper(task):
+    assert task.conditions.shape == (100, 3)
+    sc = task.scene
+    assert (sc.rows, sc.cols) == (10, 10)
+    corners = task.conditions[sc.generalisation_indices]
+    assert len(corners) == 5
+    np.testing.assert_allclose(corners[-1, :2], task.conditions[44, :2])
+    assert len(task.frames(task.conditions[0])) == 3
+    batch = task.frame_batch(task.conditions)
+    np.testing.assert_allclose(batch.b[7, 1, :3], task.conditions[7])
+    np.testing.assert_allclose(batch.b[7, 1, 3], 0.0)  # the hand column is not moved by frames
+    assert task.start[2] > 0.3  # the start pose is well above the table
+
+
+def test_a_correct_carry_passes(task):
+    ctx = {"delta_g": 0.01, "delta_r": 0.01}
+    v = task.judge(carry(task, 5)[None], task.conditions[[5]], ctx)
+    assert v.passed.tolist() == [True]
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [
+        ({"grab_offset": (0.03, 0, 0)}, "grabbed 3.0 cm from the plant"),
+        ({"release_offset": (0.05, 0, 0)}, "released 5.0 cm from the bin"),
+        ({"dip": 20}, "went through the table at sample 21 of 200"),
+    ],
+)
+def test_failure_reasons(task, kwargs, words):
+    ctx = {"delta_g": 0.01, "delta_r": 0.01}
+    v = task.judge(carry(task, 5, **kwargs)[None], task.conditions[[5]], ctx)
+    assert not v.passed[0] and words in v.reasons[0]
+
+
+def test_never_closing_or_opening(task):
+    ctx = {"delta_g": 0.01, "delta_r": 0.01}
+    t = carry(task, 5)
+    closed, opened = t.copy(), t.copy()
+    closed[:, 3] = 0.0
+    opened[60:, 3] = 1.0
+    assert task.judge(closed[None], task.conditions[[5]], ctx).reasons[0] == "never closed the hand"
+    assert "never opened the hand" in task.judge(opened[None], task.conditions[[5]], ctx).reasons[0]
+
+
+def test_through_the_tray(task):
+    t = carry(task, 5)
+    t[40, :3] = task.scene.tray_center  # inside the tray box
+    v = task.judge(t[None], task.conditions[[5]], {"delta_g": 0.01, "delta_r": 0.01})
+    assert "hit the tray at sample 41" in v.reasons[0]
+
+
+def test_delta_rule_is_mean_plus_two_std_plus_one_mm(task):
+    offsets = [0.001, 0.002, 0.003]
+    demos = [
+        as_demo(carry(task, 5, grab_offset=(o, 0, 0), release_offset=(0, 2 * o, 0)))
+        for o in offsets
+    ]
+    ctx = task.criteria_context(demos, task.conditions[[5, 5, 5]])
+    std = np.std(offsets)  # population standard deviation
+    assert ctx["delta_g"] == pytest.approx(0.002 + 2 * std + 0.001)
+    assert ctx["delta_r"] == pytest.approx(0.004 + 4 * std + 0.001)
+
+
+def test_wrong_plant_demo_is_left_out_of_the_delta_rule(task):
+    good = [as_demo(carry(task, 5, grab_offset=(0.001, 0, 0))) for _ in range(2)]
+    wrong = as_demo(carry(task, 6))  # grabbed plant 6 while the teacher chose plant 5
+    ctx = task.criteria_context([*good, wrong], task.conditions[[5, 5, 5]])
+    assert ctx["delta_g"] == pytest.approx(0.002)
+
+
+def test_demonstrations_grab_the_chosen_plant(task):
+    rng = np.random.default_rng(0)
+    for plant in (0, 44, 99):
+        raw = task.demonstrate(plant, rng)
+        assert 8.0 < task.duration(raw) < 16.0
+        demo = task.preprocess(raw)
+        v = task.judge_demo(demo, task.conditions[plant])
+        assert v.passed[0], v.reasons
+        np.testing.assert_allclose(task.condition_of(demo), task.conditions[plant])
+
+
+def test_wrong_plant_and_sloppy_grab_are_incorrect(task):
+    rng = np.random.default_rng(1)
+    wrong = task.preprocess(task.demonstrate(44, rng, mistake="wrong_plant"))
+    v = task.judge_demo(wrong, task.conditions[44])
+    assert not v.passed[0] and "instead of the chosen plant (5, 5)" in v.reasons[0]
+    s = TeachingSession(task)
+    for p in (0, 99, 9, 90):
+        s.add_demo(task.demonstrate(p, rng), condition=task.conditions[p])
+    r = s.add_demo(task.demonstrate(44, rng, mistake="wrong_plant"), condition=task.conditions[44])
+    assert INCORRECT in r.kinds and not r.demo_passed
+    sloppy = task.preprocess(task.demonstrate(44, rng, mistake="sloppy_grab"))
+    v = task.judge_demo(sloppy, task.conditions[44])
+    assert not v.passed[0] and "grabbed" in v.reasons[0]
+
+
+@pytest.mark.parametrize(
+    "make, words",
+    [
+        (lambda d: d * [1, 1000, 1000, 1000, 1], "millimetres"),
+        (lambda d: d * [1, 1, 1, 1, 2], "between 0 \\(open\\) and 1"),
+        (
+            lambda d: np.column_stack([d[:, 0], np.tile(d[0, 1:4], (len(d), 1)), d[:, 4]]),
+            "moved only",
+        ),
+        (lambda d: d[:, :4], "columns"),
+    ],
+)
+def test_preprocess_rejects_junk(task, make, words):
+    raw = task.demonstrate(3, np.random.default_rng(2))
+    with pytest.raises(InvalidDemoError, match=words):
+        task.preprocess(make(raw))
+
+
+def test_four_corner_demos_generalise_over_the_tray(task):
+    rng = np.random.default_rng(0)
+    s = TeachingSession(task)
+    for p in (0, 99, 9, 90):
+        r = s.add_demo(task.demonstrate(p, rng), condition=task.conditions[p])
+    assert r.efficacy >= 0.8
+
+
+def test_describe_where(task):
+    mask = np.zeros(100, bool)
+    mask[:20] = True  # rows 1-2: nearest the robot
+    assert "near" in task.describe_where(mask)
+    assert task.describe_where(np.ones(100, bool)) == "all over the tray"
