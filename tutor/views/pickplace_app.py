@@ -1,0 +1,245 @@
+"""The interactive pick-and-place tutor: one teaching run of Experiment 2.
+
+The trainee clicks a plant on the tray map, then *Demonstrate*: the tutor guides the
+arm to that plant as a person would in kinesthetic teaching (optionally with a
+mistake, to see what it does). What the robot then shows depends on the condition
+(NF, RF, BF, SF; see :mod:`tutor.tasks.pickplace_protocol`), and the clock counts the
+teaching time the paper's trainees had (15 minutes; 25 s per robot attempt).
+
+Tray colours (as in the paper's good-versus-bad figure): green, the robot succeeds;
+orange, it fails and no demo covers the plant (undemonstrated); blue, demonstrated;
+grey, not shown to the trainee (yet).
+"""
+
+from __future__ import annotations
+
+import html
+
+import ipywidgets as w
+import numpy as np
+
+from ..errors import TutorError
+from ..fileio import read_json
+from ..framework import TeachingSession
+from ..runtime import headless
+from ..tasks.pickplace import PickPlaceTask
+from ..tasks.pickplace_protocol import PickPlaceRun
+from .style import DEMO, FAIL, PASS
+from .text import session_report, summary
+
+__all__ = ["PickPlaceTutor", "tray_status", "PAPER_MEAN_ETA"]
+
+#: the paper's mean eta over runs per condition (Experiment 2)
+PAPER_MEAN_ETA = {"NF": 0.1278, "RF": 0.1389, "BF": 0.2354, "SF": 0.1534}
+UNKNOWN = "#d0d0d0"
+MISTAKES = {"no mistake": None, "wrong plant": "wrong_plant", "sloppy grab": "sloppy_grab"}
+
+
+def tray_status(run: PickPlaceRun, reveal: bool = False) -> np.ndarray:
+    """Status of each plant as the trainee may see it: pass, fail, demo or unknown (100,)."""
+    status = np.full(len(run.task.conditions), "unknown", dtype=object)
+    rec = run.session.latest
+    if rec is None:
+        return status
+    seen = np.arange(len(status)) if reveal else run.shown_plants()
+    status[seen] = np.where(rec.passed[seen], "pass", "fail")
+    status[rec.demonstrated] = "demo"
+    return status
+
+
+class PickPlaceTutor:
+    """Tray map, controls, clock and panel for one run (the 3-D view is optional).
+
+    Parameters
+    ----------
+    condition : {"NF", "RF", "BF", "SF"}
+    session_file : path, optional
+        Autosave after every demonstration; an existing file is resumed.
+    task : PickPlaceTask, optional
+    scene3d : object with ``update(run, status)``, optional
+        A 3-D view (e.g. :class:`tutor.views.scene3d.Scene3D`) refreshed after each step.
+    seed : int, optional
+        Seed of the simulated hand's variability.
+    """
+
+    def __init__(self, condition="BF", session_file=None, task=None, scene3d=None, seed=None):
+        self.task = PickPlaceTask() if task is None else task
+        self.session_file = session_file
+        self.scene3d = scene3d
+        self.rng = np.random.default_rng(seed)
+        self.message = ""
+        self._autosave_ok = True
+        self.run = self._resume(condition)
+        self.selected = 44
+        rows, cols = self.task.scene.rows, self.task.scene.cols
+        self.plant_buttons = [
+            w.Button(
+                description="",
+                tooltip=self.task.plant_name(i),
+                layout=w.Layout(width="26px", height="26px", padding="0"),
+            )
+            for i in range(rows * cols)
+        ]
+        for i, b in enumerate(self.plant_buttons):
+            b.on_click(lambda _, i=i: self.select(i))
+        # row 0 (nearest the robot) at the bottom, the robot's left (larger y) on the left
+        order = [r * cols + c for r in reversed(range(rows)) for c in reversed(range(cols))]
+        self.tray = w.GridBox(
+            [self.plant_buttons[i] for i in order],
+            layout=w.Layout(grid_template_columns=f"repeat({cols}, 28px)", grid_gap="2px"),
+        )
+        self.mistake = w.Dropdown(
+            options=list(MISTAKES),
+            value="no mistake",
+            description="",
+            layout=w.Layout(width="130px"),
+        )
+        self.buttons = {
+            name: w.Button(description=name, layout=w.Layout(width="120px"))
+            for name in ("Demonstrate", "Test plant", "Undo", "Finish run")
+        }
+        self.buttons["Demonstrate"].on_click(lambda _: self.demonstrate())
+        self.buttons["Test plant"].on_click(lambda _: self.test())
+        self.buttons["Undo"].on_click(lambda _: self.undo())
+        self.buttons["Finish run"].on_click(lambda _: self.finish())
+        self.clock = w.HTML()
+        self.panel = w.HTML(layout=w.Layout(width="420px"))
+        controls = w.VBox(
+            [
+                w.HBox([self.buttons["Demonstrate"], self.mistake]),
+                w.HBox(
+                    [self.buttons["Test plant"], self.buttons["Undo"], self.buttons["Finish run"]]
+                ),
+                self.clock,
+                self.panel,
+            ]
+        )
+        self.widget = w.HBox(
+            [w.VBox([w.HTML("<b>Tray</b> (robot at the bottom)"), self.tray]), controls]
+        )
+        self.widget.add_class("lfd-pickplace-tutor")
+        self.refresh()
+
+    # ---------------------------------------------------------------- state
+
+    def _resume(self, condition) -> PickPlaceRun:
+        path = self.session_file
+        if path is not None:
+            from pathlib import Path
+
+            path = Path(path)
+            if path.exists():
+                try:
+                    data = read_json(path, "session file")
+                    session = TeachingSession.from_dict(data, self.task)
+                    if session.meta.get("condition") != condition:
+                        raise TutorError(f"it holds a {session.meta.get('condition')} run")
+                    self.message = f"Resumed {session.n_demos} demonstration(s) from {path.name}."
+                    return PickPlaceRun(condition, self.task, session)
+                except TutorError as exc:
+                    self._autosave_ok = False
+                    self.message = (
+                        f"Could not resume from {path.name}: {exc}. Starting afresh without "
+                        "touching that file."
+                    )
+        return PickPlaceRun(condition, self.task)
+
+    def _autosave(self):
+        if self.session_file is not None and self._autosave_ok:
+            self.run.session.save(self.session_file)
+
+    # ---------------------------------------------------------------- actions
+
+    def select(self, plant: int) -> None:
+        self.selected = int(plant)
+        self.refresh()
+
+    def demonstrate(self, plant=None, mistake=None) -> None:
+        """Demonstrate to ``plant`` (default: the selected one)."""
+        plant = self.selected if plant is None else int(plant)
+        mistake = MISTAKES[self.mistake.value] if mistake is None else mistake
+        try:
+            self.run.demonstrate(plant, mistake=mistake, rng=self.rng)
+            self.message = ""
+        except TutorError as exc:
+            self.message = str(exc)
+        self._autosave()
+        self.refresh()
+
+    def test(self, plants=None) -> None:
+        plants = [self.selected] if plants is None else list(plants)
+        try:
+            ok = self.run.test(plants)
+            names = ", ".join(
+                f"{self.task.plant_name(p)}: {'success' if o else 'fails'}"
+                for p, o in zip(plants, ok, strict=True)
+            )
+            self.message = f"The robot tried {names}."
+        except TutorError as exc:
+            self.message = str(exc)
+        self._autosave()
+        self.refresh()
+
+    def undo(self) -> None:
+        s = self.run.session
+        if s.n_demos and not self.run.finished:
+            s.undo()
+            s.meta["demo_seconds"] = s.meta["demo_seconds"][: s.n_demos]
+            s.meta["tests"] = [t for t in s.meta["tests"] if t["after_demo"] <= s.n_demos]
+            self._autosave()
+        self.refresh()
+
+    def finish(self) -> None:
+        self.run.finish()
+        self._autosave()
+        self.refresh()
+
+    def autoplay(self, plants, mistakes=None) -> None:
+        """Headless runs only (TUTOR_HEADLESS=1): demonstrate ``plants`` then finish."""
+        if not headless() or self.run.finished:
+            return
+        mistakes = mistakes or {}
+        for i, plant in enumerate(plants):
+            if self.run.finished:
+                break
+            self.demonstrate(plant, mistake=mistakes.get(i))
+        self.finish()
+
+    # ---------------------------------------------------------------- display
+
+    def refresh(self) -> None:
+        run, rec = self.run, self.run.session.latest
+        status = tray_status(run, reveal=run.finished)
+        colours = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
+        for i, b in enumerate(self.plant_buttons):
+            b.style.button_color = colours[status[i]]
+            b.description = "●" if i == self.selected else ""
+        sf_or_after = run.condition == "SF" or run.finished
+        self.buttons["Test plant"].disabled = not sf_or_after or rec is None
+        for name in ("Demonstrate", "Undo"):
+            self.buttons[name].disabled = run.finished
+        self.clock.value = f"<b>Time</b>: {run.clock_text()}"
+        parts = [
+            f"<b>Condition {run.condition}</b> &middot; demonstrations: {run.session.n_demos}"
+            f" &middot; selected: {self.task.plant_name(self.selected)}"
+        ]
+        if rec is not None and (run.finished or run.condition != "NF"):
+            lines = summary(rec).splitlines()
+            items = "".join(f"<li>{html.escape(x[2:])}</li>" for x in lines[1:])
+            parts.append(f"<div>{html.escape(lines[0])}</div><ul>{items}</ul>")
+        if run.finished and rec is not None:
+            report = html.escape(session_report(run.session))
+            parts.append(
+                f"<div class='lfd-score'><b>Run over.</b> {report}"
+                f" (paper's mean for {run.condition}: {PAPER_MEAN_ETA[run.condition]:.1%})</div>"
+            )
+        if self.message:
+            parts.append(f"<div class='lfd-message'>{html.escape(self.message)}</div>")
+        self.panel.value = "".join(parts)
+        if self.scene3d is not None:
+            self.scene3d.update(run, status)
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)
