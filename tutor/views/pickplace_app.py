@@ -27,7 +27,7 @@ from ..tasks.pickplace_protocol import PickPlaceRun
 from .style import DEMO, FAIL, PASS
 from .text import session_report, summary
 
-__all__ = ["PickPlaceTutor", "tray_status", "PAPER_MEAN_ETA"]
+__all__ = ["PickPlaceTutor", "tray_status", "compare_runs", "PAPER_MEAN_ETA", "PAPER_THIRD_RUN_ETA"]
 
 #: the paper's mean eta over runs per condition (Experiment 2)
 PAPER_MEAN_ETA = {"NF": 0.1278, "RF": 0.1389, "BF": 0.2354, "SF": 0.1534}
@@ -243,3 +243,38 @@ class PickPlaceTutor:
         from IPython.display import display
 
         display(self.widget)
+
+
+#: the paper's mean eta in the third run (Experiment 2)
+PAPER_THIRD_RUN_ETA = {"NF": 0.1135, "RF": 0.1194, "BF": 0.2704, "SF": 0.137}
+
+
+def compare_runs(tutors) -> str:
+    """The trainee's eta over their runs beside the paper's means for the condition."""
+    lines, etas = [], []
+    for i, t in enumerate(tutors, start=1):
+        s = t.run.session
+        if s.n_demos == 0:
+            lines.append(f"Run {i}: no demonstrations yet")
+            continue
+        score = s.score()
+        etas.append(score.efficiency)
+        reached = "reached 90 %" if score.reached else f"reached {score.efficacy:.0%}"
+        lines.append(
+            f"Run {i} ({t.run.condition}): eta = {score.efficiency:.1%} ({reached} with "
+            f"{score.n_demos} demos; {t.run.clock_text()})"
+        )
+    if not etas:
+        return "\n".join(lines)
+    cond = tutors[0].run.condition
+    lines.append(
+        f"\nYour mean eta: {np.mean(etas):.1%}. The paper's 9 trainees in {cond}: mean "
+        f"{PAPER_MEAN_ETA[cond]:.1%} over the runs, {PAPER_THIRD_RUN_ETA[cond]:.1%} in the third."
+    )
+    lines.append(
+        "The paper found batch feedback (BF: the five sample plants after every demo) best, "
+        "about 1.7 times the others, because it shows how the robot generalises; replays (RF) "
+        "mostly catch wrong-plant demos, and novices choose uninformative tests (SF). One "
+        "trainee's three runs cannot show that: the paper compared 36 people."
+    )
+    return "\n".join(lines)

@@ -1,0 +1,88 @@
+"""The pick-and-place tutor driven from Python."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tutor.tasks.pickplace import PickPlaceTask
+from tutor.views.pickplace_app import PickPlaceTutor, compare_runs, tray_status
+
+
+@pytest.fixture(scope="module")
+def task():
+    return PickPlaceTask()
+
+
+def test_tray_shows_only_what_the_condition_shows(task, tmp_path):
+    nf = PickPlaceTutor("NF", session_file=tmp_path / "nf.json", task=task, seed=0)
+    nf.select(0)
+    nf.demonstrate()
+    status = tray_status(nf.run)
+    assert set(status[status != "demo"]) == {"unknown"}  # NF: nothing shown while teaching
+    assert "efficacy" not in nf.panel.value
+    nf.finish()
+    assert "unknown" not in set(tray_status(nf.run, reveal=True))
+    assert "Run over" in nf.panel.value
+
+    bf = PickPlaceTutor("BF", task=task, seed=0)
+    bf.demonstrate(44)
+    shown = np.flatnonzero(tray_status(bf.run) != "unknown")
+    assert set(shown) >= {0, 9, 90, 99} and "efficacy" in bf.panel.value
+
+    rf = PickPlaceTutor("RF", task=task, seed=0)
+    rf.demonstrate(12)
+    assert np.flatnonzero(tray_status(rf.run) != "unknown").tolist() == [12]
+
+
+def test_selected_tests_and_messages(task):
+    sf = PickPlaceTutor("SF", task=task, seed=1)
+    sf.test()
+    assert "demonstration before" in sf.message
+    sf.demonstrate(0)
+    sf.select(55)
+    sf.test()
+    assert "plant (6, 6)" in sf.message and "0:50" not in sf.clock.value
+    assert tray_status(sf.run)[55] in ("pass", "fail")
+    rf = PickPlaceTutor("RF", task=task, seed=1)
+    rf.demonstrate(0)
+    rf.test()
+    assert "only after the run" in rf.message
+
+
+def test_wrong_plant_mistake_is_flagged(task):
+    t = PickPlaceTutor("RF", task=task, seed=2)
+    for p in (0, 99, 9):
+        t.demonstrate(p)
+    t.demonstrate(44, mistake="wrong_plant")
+    assert "instead of the chosen plant (5, 5)" in t.panel.value
+
+
+def test_resume_and_corrupt_file(task, tmp_path):
+    path = tmp_path / "bf.json"
+    t = PickPlaceTutor("BF", session_file=path, task=task, seed=3)
+    t.demonstrate(0)
+    t.demonstrate(99)
+    again = PickPlaceTutor("BF", session_file=path, task=task)
+    assert again.run.session.n_demos == 2
+    assert again.run.elapsed == pytest.approx(t.run.elapsed)
+    other = PickPlaceTutor("SF", session_file=path, task=task)
+    assert other.run.session.n_demos == 0 and "Could not resume" in other.message
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "lfd-tutor-session", "version": 1, "task": {"name": "pickpl')
+    before = bad.read_text()
+    fresh = PickPlaceTutor("BF", session_file=bad, task=task)
+    fresh.demonstrate(5)
+    assert bad.read_text() == before
+
+
+def test_compare_runs_reports_the_paper(task):
+    runs = []
+    for seed in range(3):
+        t = PickPlaceTutor("BF", task=task, seed=seed)
+        for p in (0, 99, 9, 90):
+            t.demonstrate(p)
+        t.finish()
+        runs.append(t)
+    text = compare_runs(runs)
+    assert "Run 3 (BF)" in text and "23.5%" in text and "27.0%" in text
