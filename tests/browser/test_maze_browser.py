@@ -15,6 +15,7 @@ import re
 import numpy as np
 import pytest
 
+from tests.browser.conftest import ARTIFACTS
 from tutor.tasks.maze import load_layout
 
 pytestmark = pytest.mark.browser
@@ -36,9 +37,17 @@ STARTS = [
 ]
 
 
+# generous: on a busy 2-core machine starting a kernel and running the notebook is slow
+WIDGET_TIMEOUT_MS = 300_000
+
+
 def sketchpad_for(page, condition: str):
     tutor = page.locator(".lfd-maze-tutor").filter(has_text=f"Condition {condition}")
-    tutor.wait_for(timeout=120_000)
+    try:
+        tutor.wait_for(timeout=WIDGET_TIMEOUT_MS)
+    except Exception:
+        page.screenshot(path=str(ARTIFACTS / f"timeout_waiting_for_{condition}.png"))
+        raise
     tutor.scroll_into_view_if_needed()
     return tutor, tutor.locator(".lfd-sketchpad")
 
@@ -103,8 +112,9 @@ def teach_one_demo(page, artifacts, name: str):
 def test_jupyterlab_draw_demos_and_measure_latency(page, jupyterlab, artifacts):
     url, token = jupyterlab
     page.goto(f"{url}/lab/tree/02_maze_experiment.ipynb?token={token}")
-    page.locator(".jp-Notebook").wait_for(timeout=120_000)
-    page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").wait_for(timeout=120_000)
+    page.locator(".jp-Notebook").wait_for(timeout=WIDGET_TIMEOUT_MS)
+    idle = ".jp-Notebook-ExecutionIndicator[data-status='idle']"
+    page.locator(idle).wait_for(timeout=WIDGET_TIMEOUT_MS)
     page.get_by_role("menuitem", name="Run", exact=True).click()
     page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
     tutor, pad = teach_one_demo(page, artifacts, "jupyterlab")
