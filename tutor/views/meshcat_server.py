@@ -1,0 +1,327 @@
+"""A Meshcat server for the tutor: loopback only, one per kernel, gone when the kernel is.
+
+meshcat-python 0.3.2 (the newest release) starts its server with tornado's
+``listen(port)`` and no address, so the viewer is served on *every* interface
+(0.0.0.0:7000): anyone in a workshop room could open a trainee's scene. Its server is
+also stopped only by an ``atexit`` hook, so a kernel killed by a signal leaves it
+running. This module fixes both without patching meshcat:
+
+- :class:`LoopbackBridge` subclasses ``meshcat.servers.zmqserver.ZMQWebSocketBridge``
+  so that its web server binds 127.0.0.1 and its ZeroMQ socket ``tcp://127.0.0.1``.
+- ``python -m tutor.views.meshcat_server --parent-pid PID`` runs it and prints
+  ``zmq_url=...`` and ``web_url=...`` like meshcat does. A tornado ``PeriodicCallback``
+  checks twice a second that the parent process (the kernel) still lives and stops
+  the server when it does not (this also covers ``kill -9`` of the kernel).
+- :func:`get_server` starts that process once per kernel process and hands the same
+  :class:`MeshcatServer` to every caller (a module-level singleton); an ``atexit`` hook
+  stops it when the kernel exits normally. :func:`visualizer` returns a
+  ``meshcat.Visualizer`` connected to it.
+
+Nothing listens beyond the loopback interface, so the live viewer works only in a
+browser on the same machine as the kernel; :mod:`tutor.views.scene3d` falls back to a
+self-contained HTML export elsewhere (Binder, JupyterHub, Voila served remotely, CI).
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import io
+import os
+import selectors
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from urllib.parse import urlparse
+
+from ..errors import InvalidParameterError, TutorError
+
+__all__ = [
+    "LOOPBACK",
+    "MeshcatServer",
+    "MeshcatServerError",
+    "get_server",
+    "start_server",
+    "stop_server",
+    "visualizer",
+]
+
+#: The only address the tutor's Meshcat server binds.
+LOOPBACK = "127.0.0.1"
+#: How often (s) the server checks that its parent process is alive.
+PARENT_POLL_SECONDS = 0.5
+
+
+class MeshcatServerError(TutorError, RuntimeError):
+    """The Meshcat server could not be started or does not answer."""
+
+
+# --------------------------------------------------------------------------- server side
+
+
+def _loopback_url(url: str) -> str:
+    """``url`` if it names 127.0.0.1 (tcp), else a named error."""
+    parsed = urlparse(url)
+    if parsed.scheme != "tcp" or parsed.hostname != LOOPBACK or parsed.port is None:
+        raise InvalidParameterError(
+            f"the tutor's Meshcat server binds only tcp://{LOOPBACK}:<port>, got {url!r}"
+        )
+    return url
+
+
+def _bridge_class():
+    """The loopback bridge class (meshcat and tornado imported only when needed)."""
+    from meshcat.servers.zmqserver import ZMQWebSocketBridge
+
+    class LoopbackBridge(ZMQWebSocketBridge):
+        """meshcat's ZMQ/websocket bridge with every socket on 127.0.0.1.
+
+        Parameters
+        ----------
+        zmq_url : str, optional
+            ``tcp://127.0.0.1:<port>``; by default the first free port from 6000.
+        port : int, optional
+            Web server port; by default the first free port from 7000.
+        """
+
+        def __init__(self, zmq_url=None, port=None):
+            if zmq_url is not None:
+                _loopback_url(zmq_url)
+            super().__init__(zmq_url=zmq_url, host=LOOPBACK, port=port)
+
+        def make_app(self):
+            app = super().make_app()
+            listen = app.listen
+
+            def listen_on_loopback(port, address=None, **kwargs):
+                # meshcat calls app.listen(port): every interface. Bind loopback only.
+                return listen(port, address=LOOPBACK, **kwargs)
+
+            app.listen = listen_on_loopback
+            return app
+
+    return LoopbackBridge
+
+
+def _parent_alive(pid: int) -> bool:
+    if os.getppid() != pid:  # re-parented: the parent has died
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # pragma: no cover - alive, someone else's
+        return True
+    return True
+
+
+def main(argv=None) -> int:
+    """Run the loopback server until the parent process dies (or SIGTERM)."""
+    import argparse
+    import signal
+
+    parser = argparse.ArgumentParser(
+        description="The tutor's Meshcat server: loopback only, stops when its parent does."
+    )
+    parser.add_argument("--zmq-url", default=None, help="tcp://127.0.0.1:<port>")
+    parser.add_argument("--port", type=int, default=None, help="web server port")
+    parser.add_argument(
+        "--parent-pid",
+        type=int,
+        default=None,
+        help="stop when this process (default: the parent) is gone",
+    )
+    args = parser.parse_args(argv)
+    parent = os.getppid() if args.parent_pid is None else args.parent_pid
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a cell interrupt must not stop it
+
+    import tornado.ioloop
+
+    bridge = _bridge_class()(zmq_url=args.zmq_url, port=args.port)
+    print(f"zmq_url={bridge.zmq_url}", flush=True)
+    print(f"web_url={bridge.web_url}", flush=True)
+    # From here on nobody reads our stdout: send stray prints to stderr instead.
+    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
+
+    loop = tornado.ioloop.IOLoop.current()
+
+    def watch_parent():
+        if not _parent_alive(parent):
+            loop.stop()
+
+    watch_parent()
+    tornado.ioloop.PeriodicCallback(watch_parent, PARENT_POLL_SECONDS * 1000).start()
+    bridge.run()
+    return 0
+
+
+# --------------------------------------------------------------------------- client side
+
+
+@dataclass
+class MeshcatServer:
+    """A running server process started by :func:`start_server`.
+
+    Attributes
+    ----------
+    process : subprocess.Popen
+    zmq_url : str
+        ``tcp://127.0.0.1:<port>``, for ``meshcat.Visualizer(zmq_url=...)``.
+    web_url : str
+        ``http://127.0.0.1:<port>/static/``, the viewer page.
+    owner : int
+        Process id that started it (a forked child does not reuse it).
+    """
+
+    process: subprocess.Popen
+    zmq_url: str
+    web_url: str
+    owner: int = field(default_factory=os.getpid)
+    _log: object = field(default=None, repr=False)
+
+    @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    @property
+    def port(self) -> int:
+        return int(urlparse(self.web_url).port)
+
+    def alive(self) -> bool:
+        return self.process.poll() is None
+
+    def stop(self, timeout: float = 5.0) -> None:
+        """Terminate the server (kill it after ``timeout`` seconds)."""
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        if self._log is not None:
+            with contextlib.suppress(OSError):
+                self._log.close()
+            self._log = None
+
+
+def start_server(timeout: float = 30.0) -> MeshcatServer:
+    """Start a new loopback Meshcat server process, child of this one.
+
+    Most code wants :func:`get_server` (one server per process) instead.
+
+    Parameters
+    ----------
+    timeout : float
+        Seconds to wait for the server to print its URLs.
+
+    Returns
+    -------
+    MeshcatServer
+
+    Raises
+    ------
+    MeshcatServerError
+        The process exited or stayed silent for ``timeout`` seconds.
+    """
+    root = str(Path(__file__).resolve().parents[2])
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    cmd = [sys.executable, "-u", "-m", "tutor.views.meshcat_server", "--parent-pid"]
+    log = tempfile.TemporaryFile()  # stderr: read on failure, never fills a pipe
+    proc = subprocess.Popen(
+        [*cmd, str(os.getpid())],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=log,
+        env=env,
+        start_new_session=True,  # a SIGINT to the kernel's process group spares it
+    )
+    urls: dict[str, str] = {}
+    buffer = b""
+    deadline = time.monotonic() + timeout
+    with selectors.DefaultSelector() as sel:
+        sel.register(proc.stdout, selectors.EVENT_READ)
+        while len(urls) < 2:
+            left = deadline - time.monotonic()
+            if left <= 0 or proc.poll() is not None:
+                break
+            if not sel.select(min(left, 0.2)):
+                continue
+            chunk = os.read(proc.stdout.fileno(), 4096)
+            if not chunk:
+                break
+            buffer += chunk
+            *lines, buffer = buffer.split(b"\n")
+            for line in lines:
+                key, _, value = line.decode("utf-8", "replace").strip().partition("=")
+                if key in ("zmq_url", "web_url"):
+                    urls[key] = value
+    proc.stdout.close()
+    if len(urls) < 2:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait()
+        log.seek(0)
+        tail = log.read().decode("utf-8", "replace")[-2000:]
+        log.close()
+        what = f"exited with code {proc.returncode}" if proc.returncode else "did not answer"
+        raise MeshcatServerError(f"the Meshcat server {what} within {timeout:.0f} s:\n{tail}")
+    server = MeshcatServer(proc, urls["zmq_url"], urls["web_url"], _log=log)
+    atexit.register(server.stop)
+    return server
+
+
+_SERVER: MeshcatServer | None = None
+_LOCK = threading.Lock()
+
+
+def get_server(timeout: float = 30.0) -> MeshcatServer:
+    """The kernel's Meshcat server: started on first use, then reused (restarted if it died).
+
+    Returns
+    -------
+    MeshcatServer
+    """
+    global _SERVER
+    with _LOCK:
+        s = _SERVER
+        if s is None or s.owner != os.getpid() or not s.alive():
+            _SERVER = start_server(timeout)
+        return _SERVER
+
+
+def stop_server() -> None:
+    """Stop the kernel's server if this process started one."""
+    global _SERVER
+    with _LOCK:
+        if _SERVER is not None and _SERVER.owner == os.getpid():
+            _SERVER.stop()
+        _SERVER = None
+
+
+def visualizer(server: MeshcatServer | None = None, timeout: float = 10.0):
+    """A ``meshcat.Visualizer`` connected to ``server`` (default :func:`get_server`).
+
+    Replies from the server are awaited at most ``timeout`` seconds, so a dead server
+    raises ``zmq.Again`` instead of hanging the kernel.
+    """
+    import meshcat
+    import zmq
+    from meshcat.visualizer import ViewerWindow
+
+    server = get_server() if server is None else server
+    with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints the URL
+        window = ViewerWindow(zmq_url=server.zmq_url, start_server=False, server_args=[])
+    window.zmq_socket.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
+    window.zmq_socket.setsockopt(zmq.SNDTIMEO, int(timeout * 1000))
+    window.zmq_socket.setsockopt(zmq.LINGER, 0)
+    return meshcat.Visualizer(window=window)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
