@@ -1,7 +1,13 @@
-"""Benchmark one teaching step on the maze: ``TeachingSession.add_demo`` at demo M.
+"""Benchmark one teaching step: ``TeachingSession.add_demo`` at demo M, on both tasks.
 
-A step is: preprocess the recording, warm refit of the TP-GMM (K = 11, 4 frames),
-140 realisations (R^), the task criteria on all of them, and the failure flags.
+Maze (Experiment 1): preprocess the recording, warm refit of the TP-GMM (K = 11,
+4 frames), 140 realisations (R^), the task criteria on all of them, the failure flags.
+
+Pick-and-place (Experiment 2): the same step with a refit from scratch (K = 9,
+3 frames, state (t, x, y, z, g)), and separately the judgement of all 100 plants after
+a demo: 100 reproductions plus criteria (i) (feasibility map, with the hand state),
+(ii) and (iii) with the delta rule (target <= 100 ms).
+
 Each figure is the median over several random demo sets and repeats (the session is
 copied before each timed step, so every repeat adds the same M-th demo).
 
@@ -20,6 +26,7 @@ import numpy as np
 
 from tutor.framework import TeachingSession
 from tutor.tasks.maze import MazeTask
+from tutor.tasks.pickplace import PickPlaceTask
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_session.json"
 
@@ -48,20 +55,71 @@ def run(repeats: int = 9, n_sets: int = 5, steps=(5, 10, 20)) -> dict:
     return out
 
 
+def run_pickplace(repeats: int = 9, n_sets: int = 3, steps=(5, 10, 20)) -> dict:
+    task = PickPlaceTask()
+    conditions, times = task.conditions, task.times
+    batch = task.frame_batch(conditions)
+    out = {}
+    for m in steps:
+        step_times, judge_times = [], []
+        for s in range(n_sets):
+            rng = np.random.default_rng(20_000 + 100 * m + s)
+            plants = rng.choice(len(conditions), size=m, replace=False)
+            raws = [task.demonstrate(int(p), rng) for p in plants]
+            session = TeachingSession(task)
+            for p, raw in zip(plants[:-1], raws[:-1], strict=True):
+                session.add_demo(raw, condition=conditions[p])
+            for _ in range(repeats):
+                trial = copy.deepcopy(session)
+                t0 = time.perf_counter()
+                trial.add_demo(raws[-1], condition=conditions[plants[-1]])
+                step_times.append(time.perf_counter() - t0)
+            learner = trial.learner
+            demos = trial.demos
+            conds = np.array(trial.conditions)
+
+            def judge_all(learner=learner, demos=demos, conds=conds):
+                context = task.criteria_context(demos, conds)
+                mean, _ = learner.reproduce_batch(batch, times)
+                return task.judge(mean, conditions, context)
+
+            judge_all()
+            for _ in range(repeats):
+                t0 = time.perf_counter()
+                judge_all()
+                judge_times.append(time.perf_counter() - t0)
+        out[m] = {
+            "add_demo_ms": 1e3 * float(np.median(step_times)),
+            "add_demo_ms_p90": 1e3 * float(np.percentile(step_times, 90)),
+            "judge_100_plants_ms": 1e3 * float(np.median(judge_times)),
+        }
+    return out
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=9)
     parser.add_argument("--sets", type=int, default=5)
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = parser.parse_args(argv)
-    results = run(args.repeats, args.sets)
+    maze = run(args.repeats, args.sets)
     print(
         f"TeachingSession.add_demo on the maze: medians over {args.sets} demo sets "
         f"x {args.repeats} runs"
     )
     print(f"{'demo M':>7} {'median ms':>10} {'90th pct ms':>12}")
-    for m, r in results.items():
+    for m, r in maze.items():
         print(f"{m:>7} {r['add_demo_ms']:10.1f} {r['add_demo_ms_p90']:12.1f}")
+    pick = run_pickplace(args.repeats, max(1, min(args.sets, 3)))
+    print("\nPick-and-place: add_demo (refit from scratch + 100 plants judged) and the")
+    print("judgement of all 100 plants alone (reproduction + criteria (i)-(iii)), medians")
+    print(f"{'demo M':>7} {'add_demo ms':>12} {'90th pct ms':>12} {'judge 100 ms':>13}")
+    for m, r in pick.items():
+        print(
+            f"{m:>7} {r['add_demo_ms']:12.1f} {r['add_demo_ms_p90']:12.1f} "
+            f"{r['judge_100_plants_ms']:13.1f}"
+        )
+    results = {"maze": maze, "pickplace": pick}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(results, indent=2))
     print(f"written to {args.out}")

@@ -161,3 +161,55 @@ def test_describe_where(task):
     mask[:20] = True  # rows 1-2: nearest the robot
     assert "near" in task.describe_where(mask)
     assert task.describe_where(np.ones(100, bool)) == "all over the tray"
+
+
+# --- criterion (i): the arm's workspace X
+
+
+def test_out_of_reach_path_is_flagged_with_its_reason(task):
+    traj = carry(task, 5)
+    traj[60:70, :3] = [0.2, -0.9, 0.3]  # far to the right, beyond the arm's reach
+    v = task.judge(traj[None], task.conditions[[5]], {"delta_g": 0.01, "delta_r": 0.01})
+    assert not v.passed[0]
+    assert "left the arm's reachable, collision-free workspace at sample 61" in v.reasons[0]
+
+
+def test_feasibility_options(task):
+    from tutor.errors import InvalidParameterError
+    from tutor.robot import FullCheck, MapCheck
+
+    assert isinstance(task.feasibility, MapCheck)
+    full = PickPlaceTask(task.scene, feasibility="full")
+    assert isinstance(full.feasibility, FullCheck)
+    traj = carry(task, 5)[None]
+    ctx = {"delta_g": 0.01, "delta_r": 0.01}
+    assert full.judge(traj, task.conditions[[5]], ctx).passed[0]
+    with pytest.raises(InvalidParameterError, match="'map', 'full'"):
+        PickPlaceTask(task.scene, feasibility="fast")
+    with pytest.raises(InvalidParameterError, match="contains"):
+        PickPlaceTask(task.scene, feasibility=object())
+
+
+def test_map_agrees_with_full_checks_on_500_realisations(task):
+    """The issue's acceptance check: map judgement vs IK + collisions along the path."""
+    from tutor.robot import FullCheck, get_arm, scene_obstacles
+
+    full = FullCheck(get_arm(scene_obstacles(task.scene)))
+    rng = np.random.default_rng(0)
+    realisations = []
+    for m in (1, 2, 3, 4, 6):  # few demos: realisations swing wide, some fail
+        session = TeachingSession(task)
+        for p in rng.choice(100, m, replace=False):
+            session.add_demo(task.demonstrate(int(p), rng), condition=task.conditions[p])
+        realisations.append(session.realisations)
+    R = np.concatenate(realisations)
+    assert R.shape == (500, 200, 4)
+    truth = full.path_ok(R[..., :3], R[..., 3])
+    fast = task.feasibility.path_ok(R[..., :3], R[..., 3])
+    agree = float(np.mean(truth == fast))
+    print(
+        f"\nmap vs full IK + collisions on 500 TP-GMM realisations: {agree:.1%} agree "
+        f"({truth.mean():.0%} in X)"
+    )
+    assert agree >= 0.98
+    assert 0 < truth.mean() < 1  # both kinds are in the sample

@@ -68,6 +68,9 @@ __all__ = [
     "IKResult",
     "Tracking",
     "FeasibilityMap",
+    "FullCheck",
+    "MapCheck",
+    "default_map",
     "open_box",
     "scene_obstacles",
     "START_CONFIGURATION",
@@ -957,3 +960,154 @@ class FeasibilityMap:
             return cls(arrays["margin"], arrays["origin"], float(arrays["spacing"]), meta)
         except InvalidParameterError as exc:
             raise InvalidFileError(f"{path}: {exc}") from exc
+
+
+@lru_cache(maxsize=2)
+def _load_map(path: str) -> FeasibilityMap:
+    return FeasibilityMap.load(path)
+
+
+def default_map(obstacles, robot: str = "panda", tool_frame: str = "panda_hand_tcp", path=None):
+    """The bundled :class:`FeasibilityMap` (read once per process), checked against a scene.
+
+    Parameters
+    ----------
+    obstacles : sequence of (name, center (3,), size (3,))
+        The scene's boxes (:func:`scene_obstacles`).
+    robot, tool_frame : str
+    path : path, optional
+        Another map file (default :data:`DEFAULT_MAP_PATH`).
+
+    Raises
+    ------
+    InvalidParameterError
+        The map was built for other obstacles, robot or tool frame (the scene was
+        edited): rebuild it, or judge with :class:`FullCheck`.
+    """
+    fmap = _load_map(str(DEFAULT_MAP_PATH if path is None else Path(path)))
+    if not fmap.matches(obstacles, robot, tool_frame):
+        raise InvalidParameterError(
+            "the feasibility map was built for another scene (table, tray, bin or robot "
+            "differ): rebuild it with 'python scripts/make_feasibility_map.py', or use the "
+            "slower full check (feasibility='full')"
+        )
+    return fmap
+
+
+class FullCheck:
+    """Criterion (i) at full fidelity: :meth:`Arm.follow` along every path.
+
+    Same interface as :meth:`FeasibilityMap.contains`, so a task can use either; this
+    one runs inverse kinematics and a collision check at every sample (about 20-30 ms
+    per 200-sample path), the map a lookup.
+
+    Parameters
+    ----------
+    arm : Arm
+        The arm with the scene's obstacles.
+    """
+
+    def __init__(self, arm: Arm):
+        self.arm = arm
+
+    def __repr__(self) -> str:
+        return f"FullCheck({self.arm!r})"
+
+    def contains(self, points, gripper=None) -> np.ndarray:
+        """Whether the arm reaches each sample of each path without collision.
+
+        Parameters
+        ----------
+        points : array_like (..., T, 3)
+            Paths; each is followed from the start configuration, warm-starting IK
+            from the previous sample as the robot would move.
+        gripper : array_like (..., T), optional
+            Hand command per sample (default open).
+
+        Returns
+        -------
+        ndarray (..., T) of bool
+        """
+        P = np.asarray(points, dtype=float)
+        if P.ndim < 2 or P.shape[-1] != 3:
+            raise InvalidParameterError(f"points must have shape (..., T, 3), got {P.shape}")
+        shape = P.shape[:-1]
+        paths = P.reshape(-1, shape[-1], 3)
+        G = (
+            np.zeros(paths.shape[:2])
+            if gripper is None
+            else np.broadcast_to(np.asarray(gripper, dtype=float), shape).reshape(paths.shape[:2])
+        )
+        out = np.empty(paths.shape[:2], dtype=bool)
+        for i, (path, g) in enumerate(zip(paths, G, strict=True)):
+            tr = self.arm.follow(path, g)
+            out[i] = tr.converged & ~tr.collision
+        return out.reshape(shape)
+
+    def path_ok(self, paths, gripper=None) -> np.ndarray:
+        """Whether every sample of each path (..., T, 3) is reached collision-free; (...)."""
+        return self.contains(paths, gripper).all(axis=-1)
+
+
+class MapCheck:
+    """Criterion (i) fast: the feasibility map inside its grid, :class:`FullCheck` outside.
+
+    The map covers where realisations usually go; a realisation that leaves the grid
+    (models taught with one or two demos swing wide) but stays within the arm's reach
+    is followed with full IK and collision checks instead of being called outside X.
+    Samples beyond ``reach`` of the shoulder are outside X without further checks.
+
+    Parameters
+    ----------
+    fmap : FeasibilityMap
+    arm : Arm
+        The arm with the scene's obstacles (the same the map was built for).
+    shoulder : array_like (3,)
+        Centre of the reach sphere (m); the Panda's joint 2 axis.
+    reach : float
+        Radius of the reach sphere (m); the Panda reaches 0.855 m.
+    """
+
+    def __init__(self, fmap: FeasibilityMap, arm: Arm, shoulder=(0.0, 0.0, 0.333), reach=0.95):
+        self.map = fmap
+        self.full = FullCheck(arm)
+        self.shoulder = _vector(shoulder, 3, "shoulder")
+        self.reach = float(reach)
+
+    def __repr__(self) -> str:
+        return f"MapCheck({self.map!r})"
+
+    def contains(self, points, gripper=None) -> np.ndarray:
+        """Whether the arm reaches each sample of each path without collision.
+
+        Parameters
+        ----------
+        points : array_like (..., T, 3)
+        gripper : array_like (..., T), optional
+            Hand command per sample (default open).
+
+        Returns
+        -------
+        ndarray (..., T) of bool
+        """
+        P = np.asarray(points, dtype=float)
+        if P.ndim < 2 or P.shape[-1] != 3:
+            raise InvalidParameterError(f"points must have shape (..., T, 3), got {P.shape}")
+        value = self.map.value(P, gripper)
+        out = value > 0
+        off_grid = np.isneginf(value)
+        near = np.linalg.norm(P - self.shoulder, axis=-1) <= self.reach
+        redo = (off_grid & near).any(axis=-1)  # (...)
+        if redo.any():
+            G = (
+                None
+                if gripper is None
+                else np.broadcast_to(np.asarray(gripper, float), P.shape[:-1])
+            )
+            idx = np.nonzero(redo)
+            out[idx] = self.full.contains(P[idx], None if G is None else G[idx])
+        return out
+
+    def path_ok(self, paths, gripper=None) -> np.ndarray:
+        """Whether every sample of each path (..., T, 3) is in X; bool (...)."""
+        return self.contains(paths, gripper).all(axis=-1)

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidDemoError
+from ..errors import InvalidDemoError, InvalidParameterError
 from ..framework.task import Task, Verdict
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
 from .paths import minimum_jerk_through
@@ -173,13 +173,34 @@ class PickPlaceTask(Task):
     #: a recording whose gripper path is shorter than this (m) is junk
     min_path_length = 0.05
 
-    def __init__(self, scene: PickPlaceScene | None = None, feasibility=None):
+    def __init__(self, scene: PickPlaceScene | None = None, feasibility="map"):
         self.scene = load_scene() if scene is None else scene
-        self.feasibility = feasibility
+        self.feasibility = self._feasibility(feasibility)
         self.start = start_position(self.scene)
         self._times = np.linspace(0.0, 1.0, self.scene.n_samples)
         self._conditions = self.scene.plant_positions
         self._batch = self.frame_batch(self._conditions)
+
+    def _feasibility(self, how):
+        from ..robot import FullCheck, MapCheck, default_map, get_arm, scene_obstacles
+
+        sc = self.scene
+        if isinstance(how, str):
+            boxes = scene_obstacles(sc)
+            if how == "map":
+                fmap = default_map(boxes, sc.robot, sc.tool_frame)
+                return MapCheck(fmap, get_arm(boxes, sc.robot, sc.tool_frame))
+            if how == "full":
+                return FullCheck(get_arm(boxes, sc.robot, sc.tool_frame))
+            raise InvalidParameterError(
+                f"feasibility must be 'map', 'full', None or a checker, got {how!r}"
+            )
+        if how is not None and not callable(getattr(how, "contains", None)):
+            raise InvalidParameterError(
+                "feasibility must have a contains(points, gripper) method, "
+                f"got {type(how).__name__}"
+            )
+        return how
 
     @property
     def conditions(self) -> np.ndarray:
@@ -381,7 +402,7 @@ class PickPlaceTask(Task):
         bad = below_table | in_tray
         unreachable = np.zeros_like(bad)
         if self.feasibility is not None:
-            unreachable = ~self.feasibility.contains(pos)
+            unreachable = ~self.feasibility.contains(pos, traj[..., 3])
             bad = bad | unreachable
         grab, release = self._events(traj)
         rows = np.arange(len(traj))
