@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -65,8 +66,31 @@ def test_every_bundled_file_is_documented_and_loads():
     readme = (ASSETS.parent / "README.md").read_text()
     for f in files:
         ds = load_demos(f)
-        assert ds.task == "maze" and ds.description and len(ds) >= 3
+        assert ds.task == f.stem.split("_")[0] and ds.description and len(ds) >= 3
         assert f.name in readme
+
+
+def test_conditions_round_trip_and_bad_conditions(tmp_path):
+    demos = [np.zeros((3, 5)), np.ones((4, 5))]
+    path = save_demos(
+        tmp_path / "d.json",
+        demos,
+        task="pickplace",
+        columns="txyzg",
+        conditions=[[0.1, 0.2, 0.3], None],
+    )
+    ds = load_demos(path)
+    np.testing.assert_allclose(ds.conditions[0], [0.1, 0.2, 0.3])
+    assert ds.conditions[1] is None
+    data = json.loads(path.read_text())
+    data["conditions"][0] = "plant 7"
+    path.write_text(json.dumps(data))
+    with pytest.raises(InvalidFileError, match="condition 1"):
+        load_demos(path)
+    data["conditions"] = [None]
+    path.write_text(json.dumps(data))
+    with pytest.raises(InvalidFileError, match="one entry per demo"):
+        load_demos(path)
 
 
 @pytest.mark.parametrize("suffix", [".json", ".csv"])

@@ -5,7 +5,12 @@ JSON (``*.json``)::
     {"format": "lfd-tutor-demos", "version": 1, "task": "maze",
      "columns": ["t", "x", "y"], "units": {"t": "s", "x": "m", "y": "m"},
      "description": "free text",
-     "demos": [[[t, x, y], [t, x, y], ...], ...]}
+     "demos": [[[t, x, y], [t, x, y], ...], ...],
+     "conditions": [[...], null, ...]}
+
+``conditions`` is optional: the test condition the teacher meant each demo for (for
+pick-and-place the chosen plant's grasp point), ``null`` where not recorded. It lets a
+session tell a demo to the wrong place from a demo to the right one.
 
 CSV (``*.csv``): a header line ``demo,t,x,y`` (further coordinate columns
 allowed), then one row per sample; rows with the same ``demo`` label form one
@@ -44,13 +49,22 @@ class DemoSet:
         Column names, time first.
     task : str or None
     description : str
+    conditions : list of (ndarray or None)
+        The condition each demo was meant for, None where not recorded.
     """
 
-    def __init__(self, demos, columns=("t", "x", "y"), task=None, description=""):
+    def __init__(self, demos, columns=("t", "x", "y"), task=None, description="", conditions=None):
         self.demos = [np.asarray(d, dtype=float) for d in demos]
         self.columns = list(columns)
         self.task = task
         self.description = description
+        if conditions is None:
+            conditions = [None] * len(self.demos)
+        if len(conditions) != len(self.demos):
+            raise InvalidFileError(
+                f"{len(conditions)} conditions for {len(self.demos)} demos: give one per demo"
+            )
+        self.conditions = [None if c is None else np.asarray(c, float) for c in conditions]
 
     def __len__(self) -> int:
         return len(self.demos)
@@ -62,8 +76,13 @@ class DemoSet:
         return self.demos[i]
 
 
-def save_demos(path, demos, task=None, columns=("t", "x", "y"), description="") -> Path:
-    """Write demos atomically as JSON or CSV (chosen by the file's suffix)."""
+def save_demos(
+    path, demos, task=None, columns=("t", "x", "y"), description="", conditions=None
+) -> Path:
+    """Write demos atomically as JSON or CSV (chosen by the file's suffix).
+
+    ``conditions`` (one per demo, or None) is kept in JSON only.
+    """
     path = Path(path)
     demos = [np.asarray(d, dtype=float) for d in demos]
     if path.suffix.lower() == ".csv":
@@ -82,6 +101,15 @@ def save_demos(path, demos, task=None, columns=("t", "x", "y"), description="") 
             "columns": list(columns),
             "description": description,
             "demos": [d.tolist() for d in demos],
+            **(
+                {}
+                if conditions is None
+                else {
+                    "conditions": [
+                        None if c is None else np.asarray(c, float).tolist() for c in conditions
+                    ]
+                }
+            ),
         },
     )
 
@@ -107,8 +135,27 @@ def load_demos(path) -> DemoSet:
         raise InvalidFileError(f"{path.name}: 'demos' must be a list of demonstrations")
     demos = [_table(d, len(columns), f"{path.name}, demo {i + 1}") for i, d in enumerate(raw)]
     task = data.get("task")
+    conditions = data.get("conditions")
+    if conditions is not None:
+        if not (isinstance(conditions, list) and len(conditions) == len(demos)):
+            raise InvalidFileError(
+                f"{path.name}: 'conditions' must be a list with one entry per demo "
+                f"({len(demos)}), each a list of numbers or null"
+            )
+        conditions = [
+            None
+            if c is None
+            else _table(
+                [c], len(c) if isinstance(c, list) else 0, f"{path.name}, condition {i + 1}"
+            )[0]
+            for i, c in enumerate(conditions)
+        ]
     return DemoSet(
-        demos, columns, task if isinstance(task, str) else None, str(data.get("description", ""))
+        demos,
+        columns,
+        task if isinstance(task, str) else None,
+        str(data.get("description", "")),
+        conditions,
     )
 
 
