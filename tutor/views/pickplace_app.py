@@ -117,6 +117,9 @@ class PickPlaceTutor:
         self.widget = w.HBox(
             [w.VBox([w.HTML("<b>Tray</b> (robot at the bottom)"), self.tray]), controls]
         )
+        view3d = getattr(scene3d, "widget", None)
+        if view3d is not None:  # the 3-D view under the tray map and the controls
+            self.widget = w.VBox([self.widget, view3d])
         self.widget.add_class("lfd-pickplace-tutor")
         self.refresh()
 

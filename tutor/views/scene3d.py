@@ -346,9 +346,13 @@ class Scene3D:
         frames per second, interpolated by the viewer.
     robot : bool
         Draw the robot (tests draw it once without).
+    live_timeout : float
+        Seconds to wait for the live server's reply before falling back to a snapshot.
     """
 
-    def __init__(self, task=None, *, mode="auto", height=480, seconds=10.0, robot=True):
+    def __init__(
+        self, task=None, *, mode="auto", height=480, seconds=10.0, robot=True, live_timeout=10.0
+    ):
         if task is None:
             from ..tasks.pickplace import PickPlaceTask
 
@@ -368,7 +372,7 @@ class Scene3D:
         if self.mode == "live":
             from .meshcat_server import visualizer
 
-            live = visualizer().window
+            live = visualizer(timeout=live_timeout).window
         self.recorder = SceneRecorder(live)
         import meshcat
 
@@ -377,6 +381,7 @@ class Scene3D:
         self._robot = robot_meshes(self.scene.robot) if robot else None
         self._arm = None
         self._widget = None
+        self._shown_key = None
         self._draw_static_scene()
         self.set_status(np.full(len(task.conditions), "unknown", dtype=object))
         self._claim_live()
@@ -523,10 +528,10 @@ class Scene3D:
         track = arm.follow(
             P[:, :3], gripper=P[:, 3], q0=self.scene.start_configuration, check_collisions=False
         )
-        fps = (T - 1) / self.seconds
+        fps = T / self.seconds  # 200 samples over 10 s: 20 keys per second
         anim = ma.Animation(default_framerate=fps)
         closed = P[:, 3] >= 0.5
-        tiny = tf.scale_matrix(1e-3)
+        tiny, one = [1e-3] * 3, [1.0] * 3
         if self._robot is not None:
             placements = self._placements(track.qs)
         for t in range(T):
@@ -536,8 +541,11 @@ class Scene3D:
                         frame[name].set_transform(placements[t, g])
                 p, _ = arm.fk(track.qs[t])
                 frame["lfd/hand"].set_transform(tf.translation_matrix(p))
-                frame["lfd/hand/open"].set_transform(tiny if closed[t] else np.eye(4))
-                frame["lfd/hand/closed"].set_transform(np.eye(4) if closed[t] else tiny)
+                # a scale track: a transform track would animate position and rotation only
+                frame["lfd/hand/open"].set_property("scale", "vector3", tiny if closed[t] else one)
+                frame["lfd/hand/closed"].set_property(
+                    "scale", "vector3", one if closed[t] else tiny
+                )
         self.draw_trails("animated", [P], colour or "#222222")
         self.vis.set_animation(anim, play=True, repetitions=1)
         info = AnimationInfo(T, fps, (T - 1) / fps, label, bool(track.converged.all()))
@@ -581,8 +589,17 @@ class Scene3D:
         first failing one of the batch, or the replay), or the latest demonstration
         when the robot showed nothing (NF).
         """
-        self.set_status(status)
         session, task = run.session, run.task
+        key = (
+            id(session),
+            len(session.events),
+            len(session.meta.get("tests", [])),
+            run.finished,
+            tuple(np.asarray(status, dtype=object).ravel()),
+        )
+        if key == self._shown_key:  # e.g. the trainee only selected another plant
+            return
+        self.set_status(status)
         demos = [d[:, -4:] for d in session.demos]
         self.draw_trails("demos", demos, DEMO)
         rec = session.latest
@@ -612,6 +629,7 @@ class Scene3D:
             self.animate(demos[-1], label, DEMO)
         else:
             self.clear_animation()
+        self._shown_key = key
         self._claim_live()
         self.refresh()
 

@@ -1,0 +1,382 @@
+"""The 3-D pick-and-place scene (Meshcat): loopback server, static export, animation."""
+
+from __future__ import annotations
+
+import base64
+import gzip
+import os
+import re
+import socket
+import struct
+import subprocess
+import sys
+import textwrap
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tutor.errors import InvalidParameterError
+from tutor.tasks.pickplace import PickPlaceTask
+from tutor.views import meshcat_server
+from tutor.views.meshcat_server import LOOPBACK, get_server, start_server, visualizer
+from tutor.views.pickplace_app import PickPlaceTutor, tray_status
+from tutor.views.scene3d import STATUS_COLOURS, Scene3D, SceneRecorder
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def task():
+    return PickPlaceTask()
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _gone(pid: int) -> bool:
+    """The process has exited (no such process, or a zombie nobody reaped yet)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except (FileNotFoundError, ProcessLookupError):
+        return True
+    state = re.search(r"^State:\s+(\S)", status, re.M)
+    return state is not None and state.group(1) in "ZX"
+
+
+def _wait_gone(pid: int, seconds: float) -> bool:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if _gone(pid):
+            return True
+        time.sleep(0.1)
+    return _gone(pid)
+
+
+def _listening(pid: int) -> list[tuple[str, int]]:
+    """(address, port) of every listening TCP socket of ``pid`` (from /proc)."""
+    inodes = set()
+    for fd in Path(f"/proc/{pid}/fd").iterdir():
+        try:
+            target = os.readlink(fd)
+        except OSError:
+            continue
+        if target.startswith("socket:["):
+            inodes.add(target[8:-1])
+    out = []
+    for table, family in (("tcp", socket.AF_INET), ("tcp6", socket.AF_INET6)):
+        path = Path(f"/proc/{pid}/net/{table}")
+        if not path.exists():
+            continue
+        for line in path.read_text().splitlines()[1:]:
+            fields = line.split()
+            local, state, inode = fields[1], fields[3], fields[9]
+            if state != "0A" or inode not in inodes:  # 0A = LISTEN
+                continue
+            hex_addr, hex_port = local.split(":")
+            raw = bytes.fromhex(hex_addr)
+            # /proc prints the address as 32-bit words in host (little-endian) order
+            raw = b"".join(raw[i : i + 4][::-1] for i in range(0, len(raw), 4))
+            out.append((socket.inet_ntop(family, raw), int(hex_port, 16)))
+    return out
+
+
+def _non_loopback_addresses() -> set[str]:
+    """IPv4 addresses of this machine other than 127.x (may be empty)."""
+    found = set()
+    try:
+        out = subprocess.run(["hostname", "-I"], capture_output=True, text=True, timeout=5)
+        found.update(a for a in out.stdout.split() if "." in a)
+    except (OSError, subprocess.SubprocessError):
+        pass
+    try:
+        found.update(
+            info[4][0] for info in socket.getaddrinfo(socket.gethostname(), None, socket.AF_INET)
+        )
+    except OSError:
+        pass
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        try:  # no packet is sent: this only asks the kernel for the outgoing address
+            s.connect(("192.0.2.1", 9))
+            found.add(s.getsockname()[0])
+        except OSError:
+            pass
+    return {a for a in found if not a.startswith("127.") and a != "0.0.0.0"}
+
+
+def _scene_commands(html_text: str) -> list[dict]:
+    """Decode the commands packed into a static page."""
+    import umsgpack
+
+    out = []
+    chunks = re.findall(r'class="scene-data">([^<]*)</script>', html_text)
+    for chunk in chunks:
+        raw = gzip.decompress(base64.b64decode(chunk))
+        i = 0
+        while i < len(raw):
+            (n,) = struct.unpack(">I", raw[i : i + 4])
+            out.append(umsgpack.unpackb(raw[i + 4 : i + 4 + n]))
+            i += 4 + n
+    return out
+
+
+# --------------------------------------------------------------------------- the server
+
+
+def test_server_listens_on_loopback_only():
+    server = get_server()
+    assert server.alive()
+    with urllib.request.urlopen(server.web_url, timeout=10) as r:
+        assert r.status == 200 and b"meshcat" in r.read().lower()
+    assert server.web_url.startswith(f"http://{LOOPBACK}:")
+    assert server.zmq_url.startswith(f"tcp://{LOOPBACK}:")
+    # Every listening socket of the server process is bound to 127.0.0.1.
+    sockets = _listening(server.pid)
+    ports = {port for _, port in sockets}
+    assert server.port in ports and int(server.zmq_url.rsplit(":", 1)[1]) in ports
+    assert {addr for addr, _ in sockets} == {LOOPBACK}, sockets
+    # ... and the machine's other addresses do not reach it.
+    for addr in _non_loopback_addresses():
+        for port in ports:
+            with socket.socket() as s:
+                s.settimeout(2)
+                with pytest.raises(OSError):
+                    s.connect((addr, port))
+
+
+def test_server_is_reused_and_restarted():
+    a = get_server()
+    assert get_server() is a
+    vis = visualizer()
+    assert vis.window.web_url == a.web_url
+    a.stop()
+    b = get_server()  # a dead server is replaced
+    assert b is not a and b.alive() and _wait_gone(a.pid, 5)
+    with pytest.raises(InvalidParameterError):
+        meshcat_server._loopback_url("tcp://0.0.0.0:6000")
+
+
+CHILD = textwrap.dedent(
+    """
+    import sys, time
+    from tutor.views.meshcat_server import get_server
+    s = get_server()
+    print(s.pid, flush=True)
+    if sys.argv[1] == "wait":
+        time.sleep(120)
+    """
+)
+
+
+@pytest.mark.parametrize("how", ["kill -9", "normal exit"])
+def test_server_dies_with_its_parent(how):
+    child = subprocess.Popen(
+        [sys.executable, "-c", CHILD, "wait" if how == "kill -9" else "exit"],
+        stdout=subprocess.PIPE,
+        text=True,
+        cwd=REPO,
+    )
+    try:
+        pid = int(child.stdout.readline())
+        if how == "kill -9":
+            assert not _gone(pid)
+            child.kill()  # SIGKILL: no atexit hook runs in the child
+        child.wait(30)
+        assert _wait_gone(pid, 5), f"the Meshcat server {pid} outlived its parent ({how})"
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+
+
+def test_dead_live_viewer_falls_back():
+    server = start_server()
+    vis = visualizer(server, timeout=1.0)
+    rec = SceneRecorder(vis.window)
+    import meshcat
+    import meshcat.geometry as mg
+
+    scene = meshcat.Visualizer(window=rec)
+    scene["box"].set_object(mg.Box([0.1, 0.1, 0.1]))
+    assert rec.live is not None
+    server.stop()
+    scene["box2"].set_object(mg.Box([0.1, 0.1, 0.1]))
+    assert rec.live is None and "stopped answering" in rec.live_error
+    assert [c[1] for c in rec.commands()] == ["/meshcat/box", "/meshcat/box2"]
+
+
+# --------------------------------------------------------------------------- the scene
+
+
+def test_headless_scene_is_static_without_a_server(task, monkeypatch, tmp_path):
+    monkeypatch.setenv("TUTOR_HEADLESS", "1")
+
+    def no_server(*args, **kwargs):
+        raise AssertionError("a headless Scene3D must not start a server")
+
+    monkeypatch.setattr(meshcat_server, "get_server", no_server)
+    scene = Scene3D(task)
+    assert scene.mode == "static" and scene.recorder.live is None
+    path = scene.save_html(tmp_path / "scene.html")
+    text = path.read_text()
+    assert 2e6 < len(text) < 12e6  # meshes compressed; meshcat's own export is ~15 MB
+    assert "MeshCat.Viewer" in text and "<iframe" not in text
+    commands = _scene_commands(text)
+    paths = {c.get("path") for c in commands}
+    assert "/meshcat/robot/visuals/panda_link0_0" in paths
+    assert sum(p.startswith("/meshcat/lfd/plants/") and p.endswith("/ball") for p in paths) == 100
+    widget = scene.widget
+    assert "srcdoc=" in widget.children[1].value
+
+
+def test_bad_input_is_named(task):
+    scene = Scene3D(task, mode="static", robot=False)
+    with pytest.raises(InvalidParameterError, match="entries"):
+        scene.set_status(["pass"] * 3)
+    with pytest.raises(InvalidParameterError, match="unknown plant status"):
+        scene.set_status(["great"] * 100)
+    with pytest.raises(InvalidParameterError, match="finite"):
+        scene.animate(np.full((10, 4), np.nan))
+    with pytest.raises(InvalidParameterError, match="shape"):
+        scene.animate(np.zeros((10, 2)))
+    with pytest.raises(InvalidParameterError, match="mode"):
+        Scene3D(task, mode="web")
+    with pytest.raises(InvalidParameterError, match="seconds"):
+        Scene3D(task, mode="static", seconds=0)
+
+
+def test_one_realisation_animates_smoothly(task):
+    tutor = PickPlaceTutor("RF", task=task, seed=4)
+    tutor.demonstrate(44)
+    run = tutor.run
+    path = run.session.realisations[44][:, -4:]
+    scene = Scene3D(task, mode="static")
+    info = scene.animate(path, "test")
+    assert info.frames == 200 and 20 <= info.fps <= 30 and 8 <= info.duration <= 12
+    (anim,) = [c for c in _scene_commands(scene.static_html()) if c["type"] == "set_animation"]
+    clips = {a["path"]: a["clip"] for a in anim["animations"]}
+    assert len([p for p in clips if "/robot/visuals/" in p]) == 11  # every Panda link moves
+    hand = clips["/meshcat/lfd/hand"]
+    assert hand["fps"] == pytest.approx(info.fps)
+    (pos,) = [t for t in hand["tracks"] if t["name"] == ".position"]
+    times = np.array([k["time"] for k in pos["keys"]]) / hand["fps"]
+    assert np.allclose(np.diff(times), 1 / info.fps) and times[-1] == pytest.approx(info.duration)
+    xyz = np.array([k["value"] for k in pos["keys"]])
+    assert np.abs(xyz - path[:, :3]).max() < 0.01  # the hand follows the path
+    assert np.linalg.norm(np.diff(xyz, axis=0), axis=1).max() < 0.03  # no jumps per key
+    # the "closed" marker is shown exactly while the hand is closed
+    closed = clips["/meshcat/lfd/hand/closed"]
+    (scale,) = [t for t in closed["tracks"] if t["name"] == ".scale"]
+    shown = np.array([k["value"][0] > 0.5 for k in scale["keys"]])
+    assert np.array_equal(shown, path[:, 3] >= 0.5) and shown.any() and not shown.all()
+
+
+def test_tutor_updates_the_scene(task):
+    scene = Scene3D(task, mode="static", robot=False)
+    tutor = PickPlaceTutor("RF", task=task, scene3d=scene, seed=5)
+    assert scene.animation is None
+    tutor.demonstrate(12)
+    status = tray_status(tutor.run)
+    assert "plant (2, 3)" in scene.animation.label  # the replay of the demonstrated plant
+    balls = {
+        c["path"]: c
+        for c in _scene_commands(scene.static_html())
+        if c["type"] == "set_object" and c["path"].endswith("/ball")
+    }
+    for i in (12, 0, 99):
+        colour = balls[f"/meshcat/lfd/plants/{i}/ball"]["object"]["materials"][0]["color"]
+        assert colour == int(STATUS_COLOURS[status[i]].lstrip("#"), 16)
+    # selecting another plant changes nothing in 3-D (no replay, no new export)
+    before = scene._view.value
+    tutor.select(3)
+    assert scene._view.value is before
+    nf = PickPlaceTutor("NF", task=task, scene3d=Scene3D(task, mode="static", robot=False))
+    nf.demonstrate(7)
+    assert nf.scene3d.animation.label.startswith("Your demonstration 1")
+    assert "Animated" in nf.scene3d.widget.children[0].value
+
+
+def test_live_scene_streams_to_the_loopback_server(task):
+    scene = Scene3D(task, mode="live", robot=False)
+    assert scene.mode == "live"
+    url = scene.recorder.web_url
+    assert url == get_server().web_url and url.startswith(f"http://{LOOPBACK}:")
+    assert f"src='{url}'" in scene.widget.children[1].value
+    served = visualizer().static_html()  # the server's own snapshot of its scene tree
+    paths = {c.get("path") for c in _server_commands(served)}
+    assert "/meshcat/lfd/plants/0/ball" in paths and "/meshcat/lfd/table" in paths
+
+
+def _server_commands(html_text: str) -> list[dict]:
+    import umsgpack
+
+    blobs = re.findall(r"data:application/octet-binary;base64,([A-Za-z0-9+/=]+)", html_text)
+    return [umsgpack.unpackb(base64.b64decode(b)) for b in blobs]
+
+
+# --------------------------------------------------------------------------- in a browser
+
+
+def _render(html_path: Path, png: Path, page) -> np.ndarray:
+    from PIL import Image
+
+    page.goto(html_path.as_uri())
+    page.wait_for_function("document.body.dataset.ready", timeout=90_000)
+    assert page.evaluate("document.body.dataset.ready") == "1"
+    page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+    time.sleep(0.5)
+    page.screenshot(path=str(png))
+    return np.asarray(Image.open(png).convert("RGB")).astype(int)
+
+
+@pytest.mark.browser
+def test_static_export_shows_the_robot_in_chromium(task, tmp_path):
+    from playwright.sync_api import sync_playwright
+
+    from tests.browser.conftest import ARTIFACTS, CHROMIUM, CHROMIUM_FLAGS
+
+    if not Path(CHROMIUM).exists():
+        pytest.fail("Debian's chromium is missing: scripts/test.sh installs it")
+    ARTIFACTS.mkdir(exist_ok=True)
+    with_robot = Scene3D(task, mode="static")
+    without = Scene3D(task, mode="static", robot=False)
+    status = np.full(100, "unknown", dtype=object)
+    status[:50] = "pass"
+    for s in (with_robot, without):
+        s.set_status(status)
+    files = {
+        "robot": with_robot.save_html(tmp_path / "robot.html"),
+        "none": without.save_html(tmp_path / "none.html"),
+    }
+    with sync_playwright() as p:
+        context = p.chromium.launch_persistent_context(
+            str(tmp_path / "profile"),  # a fresh user-data-dir
+            executable_path=CHROMIUM,
+            args=CHROMIUM_FLAGS,
+            headless=True,
+            viewport={"width": 900, "height": 650},
+        )
+        try:
+            page = context.new_page()
+            img = {k: _render(f, ARTIFACTS / f"scene3d_{k}.png", page) for k, f in files.items()}
+        finally:
+            context.close()
+    a, b = img["robot"], img["none"]
+    h, w, _ = a.shape
+    changed = np.abs(a - b).sum(axis=2) > 60
+    ys, xs = np.nonzero(changed)
+    # The Panda covers a good part of the picture, where the camera sees it: left of
+    # centre and above the table (the tray and bin are lower right).
+    assert changed.mean() > 0.03, f"only {changed.mean():.2%} of the pixels show the robot"
+    assert w * 0.2 < xs.mean() < w * 0.6 and ys.mean() < h * 0.55
+    # ... and it is the Panda's white and dark grey, not the blue background or the table.
+    robot_pixels = a[changed]
+    grey = (robot_pixels.max(axis=1) - robot_pixels.min(axis=1)) < 40
+    assert grey.mean() > 0.8
+    # The plants are coloured by status: many green (succeeds) pixels in both pictures.
+    green = np.array([int(STATUS_COLOURS["pass"][i : i + 2], 16) for i in (1, 3, 5)])
+    for im in (a, b):
+        near = np.abs(im - green).sum(axis=2) < 90
+        assert near.sum() > 200
