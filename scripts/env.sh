@@ -56,6 +56,14 @@ _tutor_env_setup() {
         }
         echo "$want" >"$stamp"
     fi
+
+    # JupyterLab settings for a workshop room: no news or update pop-ups (and no
+    # fetching them from the internet); see scripts/jupyterlab_overrides.json.
+    local settings="$TUTOR_VENV/share/jupyter/lab/settings"
+    if ! cmp -s "$TUTOR_ROOT/scripts/jupyterlab_overrides.json" "$settings/overrides.json"; then
+        mkdir -p "$settings" &&
+            cp "$TUTOR_ROOT/scripts/jupyterlab_overrides.json" "$settings/overrides.json"
+    fi
 }
 
 if _tutor_env_setup; then
