@@ -67,11 +67,15 @@ class PickPlaceRun:
 
     @property
     def elapsed(self) -> float:
-        """Seconds used: demos, plus 25 s for every realisation shown during the run."""
+        """Seconds used: demos, plus 25 s for every realisation shown during the run.
+
+        Also counts :meth:`spend` time and the time of demos taken back with :meth:`undo`.
+        """
         meta = self.session.meta
         shown = sum(len(r.shown) for r in self.session.history)
         tested = sum(len(t["plants"]) for t in meta["tests"] if not t["after_run"])
-        return float(sum(meta["demo_seconds"])) + self.realisation_seconds * (shown + tested)
+        other = float(meta.get("other_seconds", 0.0))
+        return float(sum(meta["demo_seconds"])) + self.realisation_seconds * (shown + tested) + other
 
     @property
     def remaining(self) -> float:
@@ -127,6 +131,32 @@ class PickPlaceRun:
 
     def finish(self) -> None:
         self.session.meta["finished"] = True
+
+    def spend(self, seconds: float) -> None:
+        """Count time besides demos and realisations (e.g. choosing and setting a plant)."""
+        if not seconds >= 0:
+            raise InvalidParameterError(f"seconds must be >= 0, got {seconds}")
+        meta = self.session.meta
+        meta["other_seconds"] = float(meta.get("other_seconds", 0.0)) + float(seconds)
+
+    def undo(self):
+        """Take back the latest demo; the time it and its realisations took stays spent.
+
+        Returns the record now current (None when no demo is left).
+        """
+        s = self.session
+        rec = s.latest
+        if rec is None:
+            raise InvalidParameterError("there is no demo to undo")
+        meta = s.meta
+        tests = [t for t in meta["tests"] if t["after_demo"] == rec.n_demos and not t["after_run"]]
+        spent = meta["demo_seconds"][-1] + self.realisation_seconds * (
+            len(rec.shown) + sum(len(t["plants"]) for t in tests)
+        )
+        meta["tests"] = [t for t in meta["tests"] if t["after_demo"] < rec.n_demos]
+        meta["demo_seconds"] = meta["demo_seconds"][:-1]
+        self.spend(spent)
+        return s.undo()
 
     def _check_plant(self, plant) -> int:
         n = len(self.task.conditions)

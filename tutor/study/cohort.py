@@ -1,0 +1,334 @@
+"""Simulated cohorts: the paper's two experiments rerun with simulated teachers.
+
+Experiment 1 (maze), within subjects: N teachers (paper: 30), each teaches under NF,
+VF and VR (in that order, as in the paper; nothing carries over between conditions).
+Experiment 2 (pick-and-place), between subjects: N teachers (paper: 36), a quarter
+in each of NF, RF, BF and SF (teacher i is in condition ``i // (N / 4)``), three
+15-minute runs each.
+
+Reproducibility: each teacher's randomness comes from
+``numpy.random.SeedSequence([seed, experiment, teacher, stream])`` (stream 0 draws the
+traits, stream k >= 1 the k-th run), so a teacher's numbers do not depend on which
+worker process ran them or in what order; results are sorted by teacher. Workers use
+one BLAS/OpenMP thread each.
+
+Scores: Experiment 1 uses the paper's rule (demos to first reach 90 % coverage, or all
+demos; eta there). Experiment 2 uses eta = eps / |b| of the final demonstration set of
+each run (the paper gives no 90 % rule for it). Failures are counted on each run's
+final demonstration set (see :func:`run_rows`).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..errors import InvalidParameterError
+from ..framework.failures import Thresholds, is_ambiguous
+from ..teachers.traits import DEFAULT_POPULATION, Population
+
+__all__ = [
+    "CohortResult",
+    "EXPERIMENTS",
+    "StudySettings",
+    "run_experiment",
+    "simulate_teacher",
+    "check_request",
+]
+
+EXPERIMENTS = {
+    1: {"task": "maze", "conditions": ("NF", "VF", "VR"), "n": 30, "runs": 1},
+    2: {"task": "pickplace", "conditions": ("NF", "RF", "BF", "SF"), "n": 36, "runs": 3},
+}
+
+
+@dataclass(frozen=True)
+class StudySettings:
+    """Analysis settings of the simulated study (one place).
+
+    Attributes
+    ----------
+    target : float
+        Experiment 1's coverage for the score (the paper's 90 %).
+    pickplace_ambiguity : float
+        delta_a (m) for counting ambiguous pick-and-place demos. The task's default
+        (1 cm) never fires with the tutor's kinesthetic demos: two demos *of the same
+        plant* are 1.5-2.6 cm apart on average (timing varies), neighbouring plants
+        about 3 cm. 3 cm counts a demo at the same or the next plant as "similar".
+    pickplace_feasibility : bool
+        Whether realisations are also checked against the arm's feasibility map. Off:
+        the cohort judges table, tray, grab and release only (the arm check costs
+        about a second per demo).
+    """
+
+    target: float = 0.9
+    pickplace_ambiguity: float = 0.03
+    pickplace_feasibility: bool = False
+
+
+@dataclass
+class CohortResult:
+    """What a simulated cohort produced.
+
+    Attributes
+    ----------
+    experiment : int
+    seed : int
+    runs : pandas.DataFrame
+        One row per teacher, condition and run: scores, failures and the teacher's traits.
+    demos : pandas.DataFrame
+        One row per demonstration in each final set (efficacy after it, delta,
+        similarity, correct or not, ambiguous or not, how its place was chosen).
+    """
+
+    experiment: int
+    seed: int
+    runs: pd.DataFrame
+    demos: pd.DataFrame
+    settings: StudySettings = field(default_factory=StudySettings)
+
+
+def check_request(experiment, n=None, seed=0) -> tuple[int, int, int]:
+    """Validate (experiment, n, seed); returns them with n defaulted to the paper's."""
+    if experiment not in EXPERIMENTS:
+        raise InvalidParameterError(
+            f"experiment must be 1 (maze) or 2 (pick-and-place), got {experiment!r}"
+        )
+    spec = EXPERIMENTS[experiment]
+    n = spec["n"] if n is None else n
+    if not isinstance(n, int | np.integer) or isinstance(n, bool):
+        raise InvalidParameterError(f"the number of teachers must be an integer, got {n!r}")
+    k = len(spec["conditions"])
+    if experiment == 1 and n < 2:
+        raise InvalidParameterError(
+            f"Experiment 1 needs at least 2 teachers for its statistics, got n = {n}"
+        )
+    if experiment == 2 and (n < 2 * k or n % k):
+        raise InvalidParameterError(
+            f"Experiment 2 needs a multiple of {k} teachers, at least {2 * k} (2 per "
+            f"condition), got n = {n}; the paper used 36"
+        )
+    if not isinstance(seed, int | np.integer) or isinstance(seed, bool) or seed < 0:
+        raise InvalidParameterError(f"the seed must be a whole number >= 0, got {seed!r}")
+    return int(experiment), int(n), int(seed)
+
+
+def _rng(seed: int, experiment: int, teacher: int, stream: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence([seed, experiment, teacher, stream]))
+
+
+# ---------------------------------------------------------------- one teacher (in a worker)
+
+_TASKS: dict = {}
+
+
+def _task(name: str, settings: StudySettings):
+    key = (name, settings.pickplace_feasibility)
+    if key not in _TASKS:
+        if name == "maze":
+            from ..tasks.maze import MazeTask
+
+            _TASKS[key] = MazeTask()
+        else:
+            from ..tasks.pickplace import PickPlaceTask
+
+            _TASKS[key] = PickPlaceTask(
+                feasibility="map" if settings.pickplace_feasibility else None
+            )
+    return _TASKS[key]
+
+
+def run_rows(session, base: dict, ambiguity: float | None, target: float, score: str):
+    """Summarise one finished run: one row for ``runs`` and its rows for ``demos``.
+
+    Failures on the final demonstration set b: *errors* are demos that fail the task
+    criteria themselves (b not in B); *undemonstrated* is |B^ minus (R^ or b)| after the
+    last demo; *ambiguous* counts demos with s(b, b_set) <= delta_a and
+    delta_l <= eps_m - eps_{m-1} <= delta_u (re-checked here with ``ambiguity`` as
+    delta_a, or the task's own when None).
+    """
+    history = session.history
+    thr = Thresholds()
+    delta_a = session.task.ambiguity_distance if ambiguity is None else ambiguity
+    targets = session.meta.get("targets", [""] * len(history))
+    demo_rows = []
+    for rec, why in zip(history, targets, strict=False):
+        demo_rows.append(
+            {
+                **base,
+                "demo": rec.n_demos,
+                "efficacy": rec.efficacy,
+                "delta": rec.delta,
+                "similarity": None if np.isinf(rec.similarity) else rec.similarity,
+                "correct": rec.demo_passed,
+                "ambiguous": rec.demo_passed
+                and is_ambiguous(rec.similarity, rec.delta, delta_a, thr),
+                "chosen_by": why,
+            }
+        )
+    last = history[-1]
+    sc = session.score(target)
+    eta = sc.efficiency if score == "target" else last.efficacy / last.n_demos
+    row = {
+        **base,
+        "n_demos": last.n_demos,
+        "efficacy": last.efficacy,
+        "eta": eta,
+        "demos_to_target": sc.n_demos,
+        "eta_target": sc.efficiency,
+        "reached_target": sc.reached,
+        "errors": sum(not r.demo_passed for r in history),
+        "undemonstrated": last.n_undemonstrated,
+        "ambiguous": sum(d["ambiguous"] for d in demo_rows),
+        "slips": session.meta.get("slips", 0),
+        "retries": session.meta.get("retries", 0),
+        "why_stopped": session.meta.get("why_stopped", ""),
+    }
+    return row, demo_rows
+
+
+def simulate_teacher(
+    experiment: int,
+    teacher: int,
+    seed: int,
+    n: int,
+    population: Population = DEFAULT_POPULATION,
+    settings: StudySettings = StudySettings(),
+):
+    """Simulate one teacher of a cohort end to end; returns (run rows, demo rows)."""
+    spec = EXPERIMENTS[experiment]
+    traits = population.sample(_rng(seed, experiment, teacher, 0))
+    trait_cols = {f"trait_{k}": v for k, v in traits.to_dict().items() if k != "plan_focus"}
+    rows, demo_rows = [], []
+    if experiment == 1:
+        from ..teachers.maze import MazeTeacher
+
+        model = MazeTeacher(traits, _task("maze", settings))
+        for k, cond in enumerate(spec["conditions"], start=1):
+            session = model.teach(cond, _rng(seed, experiment, teacher, k))
+            base = {"teacher": teacher, "condition": cond, "run": 1}
+            row, drows = run_rows(session, base, None, settings.target, "target")
+            row["followed_rules"] = (
+                float(np.mean(session.meta["followed_rules"])) if cond == "VR" else np.nan
+            )
+            rows.append({**row, **trait_cols})
+            demo_rows += drows
+    else:
+        from ..teachers.pickplace import PickPlaceTeacher
+
+        per = n // len(spec["conditions"])
+        cond = spec["conditions"][teacher // per]
+        model = PickPlaceTeacher(traits, _task("pickplace", settings))
+        for k in range(1, spec["runs"] + 1):
+            run = model.teach(cond, _rng(seed, experiment, teacher, k))
+            base = {"teacher": teacher, "condition": cond, "run": k}
+            row, drows = run_rows(
+                run.session, base, settings.pickplace_ambiguity, settings.target, "final"
+            )
+            row["seconds"] = run.elapsed
+            rows.append({**row, **trait_cols})
+            demo_rows += drows
+    return rows, demo_rows
+
+
+def _init_worker() -> None:
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"
+    _limit_threads()
+
+
+_LIMITER = None
+
+
+def _limit_threads() -> None:
+    """One BLAS thread in this process (same arithmetic in every worker and in serial runs)."""
+    global _LIMITER
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - numpy then uses its default threads
+        return
+    _LIMITER = threadpool_limits(1)
+
+
+# ---------------------------------------------------------------- a cohort
+
+
+def run_experiment(
+    experiment: int,
+    seed: int = 0,
+    n: int | None = None,
+    workers: int | None = None,
+    progress: bool | Callable = True,
+    population: Population = DEFAULT_POPULATION,
+    settings: StudySettings = StudySettings(),
+) -> CohortResult:
+    """Simulate a whole cohort of Experiment 1 or 2.
+
+    Parameters
+    ----------
+    experiment : {1, 2}
+    seed : int
+        >= 0; the same seed gives the same numbers (whatever ``workers`` is).
+    n : int, optional
+        Number of teachers (default the paper's: 30 and 36).
+    workers : int, optional
+        Processes to use (default: the machine's cores, at most 2 teachers' worth of
+        work each); 1 runs in this process.
+    progress : bool
+        Show a tqdm progress bar (one step per teacher).
+    population : Population
+    settings : StudySettings
+
+    Returns
+    -------
+    CohortResult
+    """
+    experiment, n, seed = check_request(experiment, n, seed)
+    if workers is None:
+        workers = min(os.cpu_count() or 1, n)
+    if not isinstance(workers, int) or workers < 1:
+        raise InvalidParameterError(f"workers must be an integer >= 1, got {workers!r}")
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        tqdm.monitor_interval = 0  # no monitor thread in a process that forks workers
+        bar = tqdm(total=n, desc=f"Experiment {experiment}", unit="teacher")
+    results = {}
+    try:
+        if workers == 1:
+            _limit_threads()
+            for i in range(n):
+                results[i] = simulate_teacher(experiment, i, seed, n, population, settings)
+                if bar is not None:
+                    bar.update(1)
+        else:
+            import multiprocessing as mp
+
+            ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+            with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
+                futures = {
+                    pool.submit(simulate_teacher, experiment, i, seed, n, population, settings): i
+                    for i in range(n)
+                }
+                for fut in as_completed(futures):
+                    results[futures[fut]] = fut.result()
+                    if bar is not None:
+                        bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    rows = [r for i in sorted(results) for r in results[i][0]]
+    demo_rows = [r for i in sorted(results) for r in results[i][1]]
+    runs = pd.DataFrame(rows)
+    demos = pd.DataFrame(demo_rows)
+    order = list(EXPERIMENTS[experiment]["conditions"])
+    for frame in (runs, demos):
+        frame["condition"] = pd.Categorical(frame["condition"], categories=order, ordered=True)
+    runs = runs.sort_values(["teacher", "run", "condition"], kind="stable").reset_index(drop=True)
+    return CohortResult(experiment, seed, runs, demos, settings)

@@ -1,0 +1,257 @@
+"""Statistics of the simulated cohorts, done as the paper did them (pingouin).
+
+Experiment 1: a repeated-measures ANOVA of eta over the three conditions with
+Mauchly's sphericity test (Greenhouse-Geisser corrected p reported when sphericity is
+violated), then pairwise comparisons (paired t-tests, Bonferroni corrected).
+Experiment 2: a mixed ANOVA (between: condition; within: run), then pairwise
+comparisons of the teachers' mean eta between conditions (Welch t-tests, Bonferroni);
+the failure-count table. :func:`conclusions` checks the paper's findings on a result.
+
+Every function takes the ``runs`` frame of :class:`~tutor.study.cohort.CohortResult`.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pandas as pd
+
+from . import paper
+
+__all__ = [
+    "experiment1_stats",
+    "experiment2_stats",
+    "failure_table",
+    "relative_improvement",
+    "conclusions",
+    "summary_table",
+]
+
+ALPHA = 0.05
+
+
+def _pg():
+    import pingouin as pg
+
+    return pg
+
+
+def _col(frame: pd.DataFrame, *names):
+    """The first of ``names`` present in ``frame`` (pingouin renamed columns over versions)."""
+    for name in names:
+        if name in frame.columns:
+            return name
+    return None
+
+
+def _pairwise(frame: pd.DataFrame, **kwargs) -> pd.DataFrame:
+    pg = _pg()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = pg.pairwise_tests(data=frame, padjust="bonf", **kwargs)
+    p_unc = _col(res, "p_unc", "p-unc")
+    p_corr = _col(res, "p_corr", "p-corr")
+    out = pd.DataFrame(
+        {
+            "A": res["A"],
+            "B": res["B"],
+            "T": res["T"],
+            "p_unc": res[p_unc],
+            "p_bonf": res[p_corr] if p_corr else res[p_unc],
+        }
+    )
+    return out.reset_index(drop=True)
+
+
+def _clean(frame: pd.DataFrame) -> pd.DataFrame:
+    out = frame.copy()
+    out["condition"] = out["condition"].astype(str)
+    return out
+
+
+def experiment1_stats(runs: pd.DataFrame) -> dict:
+    """Repeated-measures ANOVA, sphericity and pairwise tests of eta (Experiment 1).
+
+    Returns
+    -------
+    dict
+        ``anova`` (F, ddof1, ddof2, p, p_gg, sphericity_W, sphericity_p,
+        sphericity_ok), ``pairwise`` (DataFrame A, B, T, p_unc, p_bonf), ``medians``,
+        ``means``, ``demos`` (mean demos per condition), ``efficacy`` (mean and sd).
+    """
+    pg = _pg()
+    data = _clean(runs)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        aov = pg.rm_anova(
+            data=data, dv="eta", within="condition", subject="teacher", correction=True,
+            detailed=True,
+        )
+        sph = pg.sphericity(data=data, dv="eta", within="condition", subject="teacher")
+    row = aov.iloc[0]
+    p = float(row[_col(aov, "p_unc", "p-unc")])
+    gg = _col(aov, "p_GG_corr", "p-GG-corr")
+    p_gg = float(row[gg]) if gg and pd.notna(row[gg]) else p
+    sph_ok = bool(sph.spher) if hasattr(sph, "spher") else bool(sph[0])
+    w_stat = float(sph.W) if hasattr(sph, "W") else float(sph[1])
+    sph_p = float(sph.pval) if hasattr(sph, "pval") else float(sph[-1])
+    anova = {
+        "F": float(row["F"]),
+        "ddof1": int(row["DF"]),
+        "ddof2": int(aov.iloc[1]["DF"]),
+        "p": p,
+        "p_gg": p_gg,
+        "sphericity_W": w_stat,
+        "sphericity_p": sph_p,
+        "sphericity_ok": sph_ok,
+        "p_used": p if sph_ok else p_gg,
+    }
+    pairs = _pairwise(data, dv="eta", within="condition", subject="teacher")
+    grouped = data.groupby("condition", sort=False)
+    return {
+        "anova": anova,
+        "pairwise": pairs,
+        "medians": grouped["eta"].median().to_dict(),
+        "means": grouped["eta"].mean().to_dict(),
+        "demos": grouped["n_demos"].mean().to_dict(),
+        "efficacy_mean": grouped["efficacy"].mean().to_dict(),
+        "efficacy_sd": grouped["efficacy"].std().to_dict(),
+        "reached_target": grouped["reached_target"].sum().astype(int).to_dict(),
+    }
+
+
+def experiment2_stats(runs: pd.DataFrame) -> dict:
+    """Mixed ANOVA (condition x run), pairwise tests and means of eta (Experiment 2)."""
+    pg = _pg()
+    data = _clean(runs)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        aov = pg.mixed_anova(
+            data=data, dv="eta", within="run", between="condition", subject="teacher"
+        )
+        try:
+            sph = pg.sphericity(data=data, dv="eta", within="run", subject="teacher")
+            sph_p = float(sph.pval) if hasattr(sph, "pval") else float(sph[-1])
+        except (ValueError, np.linalg.LinAlgError):
+            sph_p = float("nan")
+    pcol = _col(aov, "p_unc", "p-unc")
+    table = {}
+    for _, r in aov.iterrows():
+        key = {"condition": "condition", "run": "run", "Interaction": "interaction"}[r["Source"]]
+        table[key] = {
+            "F": float(r["F"]),
+            "ddof1": int(r["DF1"]),
+            "ddof2": int(r["DF2"]),
+            "p": float(r[pcol]),
+        }
+    table["sphericity_p"] = sph_p
+    per_teacher = data.groupby(["teacher", "condition"], as_index=False)["eta"].mean()
+    pairs = _pairwise(per_teacher, dv="eta", between="condition", parametric=True)
+    means = data.groupby("condition", sort=False)["eta"].mean().to_dict()
+    by_run = data.pivot_table(index="condition", columns="run", values="eta", aggfunc="mean")
+    return {
+        "anova": table,
+        "pairwise": pairs,
+        "means": means,
+        "by_run": by_run,
+        "demos": data.groupby("condition", sort=False)["n_demos"].mean().to_dict(),
+        "efficacy_mean": data.groupby("condition", sort=False)["efficacy"].mean().to_dict(),
+        "seconds": data.groupby("condition", sort=False)["seconds"].mean().to_dict()
+        if "seconds" in data
+        else {},
+    }
+
+
+def failure_table(runs: pd.DataFrame) -> pd.DataFrame:
+    """Total failures per condition over all teachers and runs (the paper's table).
+
+    Rows: demonstration errors, undemonstrated states, ambiguous demonstrations;
+    columns: the conditions.
+    """
+    data = _clean(runs)
+    order = list(dict.fromkeys(data["condition"]))
+    sums = data.groupby("condition")[["errors", "undemonstrated", "ambiguous"]].sum()
+    return sums.loc[order].T.astype(int)
+
+
+def relative_improvement(stats: dict, experiment: int) -> dict:
+    """The paper's relative improvements, from :func:`experiment1_stats` or ``2``."""
+    if experiment == 1:
+        med = stats["medians"]
+        nf = med["NF"] if med["NF"] > 0 else np.nan
+        return {"VF/NF": med["VF"] / nf, "VR/NF": med["VR"] / nf}
+    means = stats["means"]
+    others = np.mean([means[c] for c in ("NF", "RF", "SF")])
+    third = stats["by_run"][stats["by_run"].columns.max()]
+    others3 = np.mean([third[c] for c in ("NF", "RF", "SF")])
+    return {"mean": means["BF"] / others, "third run": third["BF"] / others3}
+
+
+def _p(pairs: pd.DataFrame, a: str, b: str) -> float:
+    hit = pairs[((pairs.A == a) & (pairs.B == b)) | ((pairs.A == b) & (pairs.B == a))]
+    return float(hit["p_bonf"].iloc[0]) if len(hit) else float("nan")
+
+
+def conclusions(runs: pd.DataFrame, experiment: int, stats: dict | None = None) -> dict:
+    """The paper's conclusions, each True/False on this cohort.
+
+    Experiment 1: ``NF<VF`` and ``NF<VR`` (medians lower and Bonferroni p < 0.05),
+    ``VF~VR`` (p >= 0.05). Experiment 2: ``condition effect`` (mixed ANOVA p < 0.05),
+    ``BF best`` (BF's mean eta above NF, RF and SF), ``BF fewest ambiguous``, ``BF most
+    undemonstrated``, ``RF fewest errors`` (ties count as fewest/most).
+    """
+    if experiment == 1:
+        st = experiment1_stats(runs) if stats is None else stats
+        med, pairs = st["medians"], st["pairwise"]
+        return {
+            "NF<VF": bool(med["NF"] < med["VF"] and _p(pairs, "NF", "VF") < ALPHA),
+            "NF<VR": bool(med["NF"] < med["VR"] and _p(pairs, "NF", "VR") < ALPHA),
+            "VF~VR": bool(_p(pairs, "VF", "VR") >= ALPHA),
+        }
+    st = experiment2_stats(runs) if stats is None else stats
+    means = st["means"]
+    fail = failure_table(runs)
+    others = ("NF", "RF", "SF")
+    return {
+        "condition effect": bool(st["anova"]["condition"]["p"] < ALPHA),
+        "BF best": bool(all(means["BF"] > means[c] for c in others)),
+        "BF fewest ambiguous": bool(fail.loc["ambiguous", "BF"] <= fail.loc["ambiguous"].min()),
+        "BF most undemonstrated": bool(
+            fail.loc["undemonstrated", "BF"] >= fail.loc["undemonstrated"].max()
+        ),
+        "RF fewest errors": bool(fail.loc["errors", "RF"] <= fail.loc["errors"].min()),
+    }
+
+
+def summary_table(runs: pd.DataFrame, experiment: int, stats: dict | None = None) -> pd.DataFrame:
+    """Per condition: the simulation's eta (median or mean) beside the paper's, demos, eps."""
+    if experiment == 1:
+        st = experiment1_stats(runs) if stats is None else stats
+        conds = list(st["medians"])
+        return pd.DataFrame(
+            {
+                "median eta (sim)": [st["medians"][c] for c in conds],
+                "median eta (paper)": [paper.EXPERIMENT_1["median_eta"][c] for c in conds],
+                "mean demos (sim)": [st["demos"][c] for c in conds],
+                "mean efficacy (sim)": [st["efficacy_mean"][c] for c in conds],
+                "sd efficacy (sim)": [st["efficacy_sd"][c] for c in conds],
+                "reached 90 % (sim)": [st["reached_target"][c] for c in conds],
+            },
+            index=conds,
+        )
+    st = experiment2_stats(runs) if stats is None else stats
+    conds = list(st["means"])
+    third = st["by_run"][st["by_run"].columns.max()]
+    return pd.DataFrame(
+        {
+            "mean eta (sim)": [st["means"][c] for c in conds],
+            "mean eta (paper)": [paper.EXPERIMENT_2["mean_eta"][c] for c in conds],
+            "run 3 eta (sim)": [third[c] for c in conds],
+            "run 3 eta (paper)": [paper.EXPERIMENT_2["third_run_eta"][c] for c in conds],
+            "mean demos (sim)": [st["demos"][c] for c in conds],
+            "mean efficacy (sim)": [st["efficacy_mean"][c] for c in conds],
+            "mean minutes (sim)": [st["seconds"].get(c, np.nan) / 60 for c in conds],
+        },
+        index=conds,
+    )

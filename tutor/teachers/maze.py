@@ -1,0 +1,131 @@
+"""Simulated teachers of Experiment 1 (the maze): NF, VF and VR.
+
+One :class:`MazeTeacher` (one person, one set of traits) teaches under each condition;
+the condition changes only what they are shown after each demo:
+
+NF  nothing (r empty): the teacher follows their own plan and stops when their prior
+    says the robot has had enough demos.
+VF  the whole picture R^ (green/red): they aim at the densest red region, with human
+    imprecision, and stop when the picture looks green enough to them.
+VR  the same picture and the paper's three rules (:mod:`tutor.tasks.maze_rules`):
+    they start each demo inside the rule's 4 cm circle, aiming at red inside it.
+
+The belief and stopping rules are the shared ones of :mod:`tutor.teachers.model`.
+A demonstration is a stroke through the maze's gaps from the chosen start
+(:meth:`~tutor.tasks.maze.MazeLayout.reference_path`) with the teacher's hand wobble;
+a slip cuts an obstacle's corner (an incorrect demo).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+from ..framework import TeachingSession
+from ..tasks.maze import MazeTask
+from ..tasks.maze_rules import advise_from, followed
+from .model import TeacherModel
+from .traits import TeacherTraits
+
+__all__ = ["MazeTeacher", "MAZE_CONDITIONS", "SLIP_SHIFTS"]
+
+MAZE_CONDITIONS = {"NF": "none", "VF": "all", "VR": "all"}
+#: how a slip bends the stroke: guide point index -> shift (m); each cuts an obstacle corner
+SLIP_SHIFTS = {0: (-0.05, 0.03), 2: (0.05, 0.03)}
+RATE_HZ = 80.0  #: the paper's tracker rate
+
+
+class MazeTeacher:
+    """One simulated teacher on the maze.
+
+    Parameters
+    ----------
+    traits : TeacherTraits
+    task : MazeTask, optional
+    """
+
+    def __init__(self, traits: TeacherTraits, task: MazeTask | None = None):
+        self.traits = traits
+        self.task = MazeTask() if task is None else task
+
+    def stroke(self, start, rng, slip: bool = False) -> np.ndarray:
+        """A recorded demonstration from ``start``: (t in s, x, y in m) at 80 Hz."""
+        lay = self.task.layout
+        duration = rng.uniform(2.0, 3.5)
+        n = int(duration * RATE_HZ) + 1
+        guides = lay.guide_points.copy()
+        if slip:
+            k = int(rng.choice(list(SLIP_SHIFTS)))
+            guides[k] += np.asarray(SLIP_SHIFTS[k]) * rng.uniform(0.9, 1.1)
+        scripted = dataclasses.replace(lay, guide_points=guides)
+        path = scripted.reference_path(start, rng, jitter=self.traits.motor_noise, n_samples=n)
+        s = path[:, 0]
+        tremor = rng.normal(scale=self.traits.motor_noise / 2, size=(n, 2))
+        kernel = np.hanning(9) / np.hanning(9).sum()
+        tremor = np.column_stack([np.convolve(tremor[:, i], kernel, mode="same") for i in (0, 1)])
+        xy = path[:, 1:] + tremor * np.sin(np.pi * s)[:, None]
+        return np.column_stack([s * duration, xy])
+
+    def teach(self, condition: str, rng) -> TeachingSession:
+        """Teach one run under ``condition``; returns the session (``meta`` tells the story).
+
+        ``session.meta`` holds ``condition``, ``why_stopped`` ("satisfied" or
+        "patience"), ``targets`` (how each demo's start was chosen: "plan", "red",
+        "rule 0".."rule 3"), ``slips`` and, in VR, ``followed_rules``. Maze teachers
+        never take a demo back (the paper's maze protocol has no undo).
+        """
+        if condition not in MAZE_CONDITIONS:
+            raise InvalidParameterError(
+                f"maze condition must be one of {', '.join(MAZE_CONDITIONS)}, got {condition!r}"
+            )
+        task, t = self.task, self.traits
+        rng = np.random.default_rng(rng)
+        zone, margin = task.layout.start_zone, 0.001
+        lower = np.array([zone.x0 + margin, zone.y0 + margin])
+        upper = np.array([zone.x1 - margin, zone.y1 - margin])
+        model = TeacherModel(t, rng, task.conditions, lower, upper, t.enough_maze)
+        session = TeachingSession(task, feedback=MAZE_CONDITIONS[condition])
+        meta = session.meta
+        meta.update(condition=condition, targets=[], slips=0, followed_rules=[])
+        first_start = None
+        while True:
+            m = session.n_demos
+            if condition == "VR":
+                rec = session.latest
+                advice = advise_from(task, None if rec is None else rec.passed, first_start)
+                start, why = self._follow(model, advice)
+            else:
+                start, why = model.next_target(avoid=np.flatnonzero(model.belief.demonstrated))
+            slip = model.slips()
+            record = session.add_demo(self.stroke(start, rng, slip))
+            meta["targets"].append(why)
+            meta["slips"] += int(slip)
+            if condition == "VR":
+                meta["followed_rules"].append(followed(advice, start))
+            if first_start is None:
+                first_start = np.asarray(start, float)
+            own = task.nearest_condition(start)
+            model.belief.demonstrated[own] = True
+            model.belief.observe(record.shown, record.passed[record.shown])
+            if model.satisfied(m + 1):
+                meta["why_stopped"] = "satisfied"
+                break
+            if session.n_demos >= t.patience:
+                meta["why_stopped"] = "patience"
+                break
+        meta["finished"] = True
+        return session
+
+    @staticmethod
+    def _follow(model: TeacherModel, advice):
+        """VR: a start inside the rule's circle, aimed at its worst red region (as in VF)."""
+        if advice.center is None:  # rule 1 (anywhere) or everything green
+            start, _ = model.next_target(avoid=np.flatnonzero(model.belief.demonstrated))
+            return start, f"rule {advice.rule}"
+        inside = np.linalg.norm(model.points - advice.center, axis=1) <= advice.radius
+        worst = model.belief.worst_region(within=inside)
+        target = advice.center if worst is None else worst
+        start = model.aim(target, center=advice.center, radius=advice.radius)
+        return start, f"rule {advice.rule}"

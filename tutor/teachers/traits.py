@@ -1,0 +1,207 @@
+r"""Who the simulated teachers are: every parameter of the population in one place.
+
+Sena & Howard model a teacher by their human factors Q, an interpretation
+:math:`\tilde R = \omega(r, Q)` of the realisations r they are shown, and a
+demonstration function :math:`b_{m+1} = \Omega(\tilde R, \tilde B, b_m, Q)`. The tutor's
+simulated teachers follow that model. This module holds Q: :class:`Population`
+describes how people differ (the distributions), :class:`TeacherTraits` is one person
+drawn from it.
+
+**One population, every condition.** A teacher's traits are drawn once and used
+unchanged in every condition they teach under (Experiment 1: the same person does NF,
+VF and VR; Experiment 2: the same kind of person is assigned to NF, RF, BF or SF).
+No trait depends on the condition. A condition changes only what the teacher sees
+(r) and what that costs in time, so every difference between conditions in a
+simulated cohort comes from the information shown and the clock.
+
+The paper does not measure any of these traits; the values below are our judgement
+of novices (chosen once for the whole population and never per condition), written
+down so an educator can change them and see what follows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+
+__all__ = ["Population", "TeacherTraits", "DEFAULT_POPULATION"]
+
+
+@dataclass(frozen=True)
+class TeacherTraits:
+    """One simulated teacher's human factors Q (the same in every condition).
+
+    Positions on B^ are in *unit-box* coordinates: (0, 0) and (1, 1) are the opposite
+    corners of the test grid (the maze's start grid, the plant tray).
+
+    Attributes
+    ----------
+    enough_maze, enough_pickplace : int
+        How many demonstrations the teacher believes the robot needs for the maze and
+        for pick-and-place (one personal factor times the population's median for the
+        task, so an optimist is optimistic about both). With nothing shown (NF), this
+        prior is all they have: they stop after this many demos.
+    plan_focus : tuple of float
+        The part of B^ the teacher habitually demonstrates from (unit box).
+    plan_spread : float
+        How widely their own plan scatters demos around the focus (unit box, standard
+        deviation). Small: demos cluster (ambiguous demos, undemonstrated states).
+    aim_sd : float
+        Imprecision when aiming at a place they chose (unit box, standard deviation):
+        reading a red region off the picture, a circle, or which plant to pick.
+    motor_noise : float
+        Wobble of the hand during a demonstration (metres, standard deviation of the
+        path's deviation).
+    slip_rate : float
+        Chance that one demonstration is a slip: in the maze the stroke cuts an
+        obstacle's corner; in pick-and-place the hand goes to a neighbouring plant.
+    satisfaction : float
+        Share of B^ the teacher must believe the robot succeeds at before stopping
+        (their belief, not the truth).
+    patience : int
+        The most demonstrations they are willing to give in one run.
+    setup_seconds : float
+        Pick-and-place: time per demo besides the motion (point at the plant, the
+        experimenter sets the target, the arm goes back to its start).
+    test_rate : float
+        Pick-and-place SF: chance of asking the robot to try plants after a demo.
+    """
+
+    enough_maze: int
+    enough_pickplace: int
+    plan_focus: tuple[float, float]
+    plan_spread: float
+    aim_sd: float
+    motor_noise: float
+    slip_rate: float
+    satisfaction: float
+    patience: int
+    setup_seconds: float
+    test_rate: float
+
+    def enough_demos(self, task: str) -> int:
+        """The prior count for ``task`` ("maze" or "pickplace")."""
+        return self.enough_maze if task == "maze" else self.enough_pickplace
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["plan_focus"] = list(self.plan_focus)
+        return d
+
+
+@dataclass(frozen=True)
+class Population:
+    """How novice teachers differ from one another: the distributions traits come from.
+
+    Every field is documented with the distribution it parametrises; change a value
+    here to simulate a different population (e.g. more careful teachers).
+
+    Attributes
+    ----------
+    enough_median_maze, enough_median_pickplace, enough_sigma, enough_range
+        ``enough_*`` = round(median * z) clipped to the range, with one personal
+        z ~ lognormal(0, sigma) for both tasks. Maze: the paper's unguided teachers
+        "tend to underestimate the number of demonstrations required" and 7 of 30 did
+        well without feedback; with this learner, teachers who see R^ need 4-5 demos,
+        so the median prior is 4. Pick-and-place: the paper gives no demo counts, but
+        BF teachers left the most undemonstrated states "stopping prematurely or
+        running out of time", so unguided teachers gave more demos than BF's 3-4; the
+        median prior is 6 (a bigger task: 100 plants).
+    focus_sd
+        ``plan_focus`` ~ normal around the centre of B^ (unit box), clipped to it.
+    spread_median, spread_sigma
+        ``plan_spread`` ~ lognormal; the paper's failure pictures show demos
+        co-located (ambiguous) and not covering the space (undemonstrated).
+    aim_low, aim_high
+        ``aim_sd`` ~ uniform (unit box: 0.04 of the maze's 19 cm grid is 8 mm).
+    motor_low, motor_high
+        ``motor_noise`` ~ uniform, metres (the paper's trackers: +-1 mm; hands: a few mm).
+    slip_a, slip_b
+        ``slip_rate`` ~ beta(a, b): about 3 % of demos on average (the paper's NF
+        teachers left 4 wrong-plant demos in roughly 160).
+    satisfaction_low, satisfaction_high
+        ``satisfaction`` ~ uniform.
+    patience_low, patience_high
+        ``patience`` ~ uniform integer (inclusive).
+    setup_low, setup_high
+        ``setup_seconds`` ~ uniform (s per pick-and-place demo).
+    test_low, test_high
+        ``test_rate`` ~ uniform.
+    """
+
+    enough_median_maze: float = 4.0
+    enough_median_pickplace: float = 6.0
+    enough_sigma: float = 0.45
+    enough_range: tuple[int, int] = (2, 12)
+    focus_sd: float = 0.2
+    spread_median: float = 0.22
+    spread_sigma: float = 0.5
+    aim_low: float = 0.02
+    aim_high: float = 0.06
+    motor_low: float = 0.002
+    motor_high: float = 0.005
+    slip_a: float = 1.5
+    slip_b: float = 48.0
+    satisfaction_low: float = 0.93
+    satisfaction_high: float = 1.0
+    patience_low: int = 12
+    patience_high: int = 20
+    setup_low: float = 20.0
+    setup_high: float = 45.0
+    test_low: float = 0.3
+    test_high: float = 0.8
+
+    def __post_init__(self):
+        lo, hi = self.enough_range
+        checks = [
+            (1 <= lo <= hi, f"enough_range must be 1 <= low <= high, got {self.enough_range}"),
+            (
+                self.enough_median_maze > 0 and self.enough_median_pickplace > 0,
+                "enough_median_maze and enough_median_pickplace must be > 0",
+            ),
+            (0 < self.aim_low <= self.aim_high, "need 0 < aim_low <= aim_high"),
+            (0 <= self.motor_low <= self.motor_high, "need 0 <= motor_low <= motor_high"),
+            (self.slip_a > 0 and self.slip_b > 0, "slip_a and slip_b must be > 0"),
+            (
+                0 < self.satisfaction_low <= self.satisfaction_high <= 1,
+                "need 0 < satisfaction_low <= satisfaction_high <= 1",
+            ),
+            (1 <= self.patience_low <= self.patience_high, "need 1 <= patience_low <= high"),
+            (0 <= self.setup_low <= self.setup_high, "need 0 <= setup_low <= setup_high"),
+            (0 <= self.test_low <= self.test_high <= 1, "need 0 <= test_low <= test_high <= 1"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise InvalidParameterError(f"Population: {message}")
+
+    def sample(self, rng) -> TeacherTraits:
+        """Draw one teacher (uses ``rng``, a numpy Generator, in a fixed order)."""
+        rng = np.random.default_rng(rng)
+        lo, hi = self.enough_range
+        z = rng.lognormal(0, self.enough_sigma)
+        maze = int(np.clip(np.rint(self.enough_median_maze * z), lo, hi))
+        pickplace = int(np.clip(np.rint(self.enough_median_pickplace * z), lo, hi))
+        focus = np.clip(0.5 + rng.normal(0, self.focus_sd, 2), 0.0, 1.0)
+        spread = float(self.spread_median * rng.lognormal(0, self.spread_sigma))
+        return TeacherTraits(
+            enough_maze=maze,
+            enough_pickplace=pickplace,
+            plan_focus=(float(focus[0]), float(focus[1])),
+            plan_spread=spread,
+            aim_sd=float(rng.uniform(self.aim_low, self.aim_high)),
+            motor_noise=float(rng.uniform(self.motor_low, self.motor_high)),
+            slip_rate=float(rng.beta(self.slip_a, self.slip_b)),
+            satisfaction=float(rng.uniform(self.satisfaction_low, self.satisfaction_high)),
+            patience=int(rng.integers(self.patience_low, self.patience_high + 1)),
+            setup_seconds=float(rng.uniform(self.setup_low, self.setup_high)),
+            test_rate=float(rng.uniform(self.test_low, self.test_high)),
+        )
+
+    def to_dict(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+DEFAULT_POPULATION = Population()
