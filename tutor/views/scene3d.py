@@ -787,7 +787,7 @@ _PAGE = """<!DOCTYPE html>
 body {{ margin: 0; font-family: sans-serif; }}
 #meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
 #lfd-legend {{ position: absolute; left: 6px; top: 6px; background: rgba(255,255,255,.85);
-  padding: 4px 8px 4px 0; border-radius: 4px; max-width: 60vw; }}
+  padding: 4px 8px 4px 0; border-radius: 4px; max-width: 92vw; }}
 #lfd-caption {{ font-size: 12px; margin: 3px 0 0 10px; }}
 </style></head>
 <body>
