@@ -26,8 +26,10 @@ EXPERIMENT_2 = {
     "mean_eta": {"NF": 0.1278, "RF": 0.1389, "BF": 0.2354, "SF": 0.1534},
     "third_run_eta": {"NF": 0.1135, "RF": 0.1194, "BF": 0.2704, "SF": 0.137},
     # BF over the mean of the other three: the paper's "about 169 %" and "about 220 %"
-    "relative": {"mean": 0.2354 / ((0.1278 + 0.1389 + 0.1534) / 3),
-                 "third run": 0.2704 / ((0.1135 + 0.1194 + 0.137) / 3)},
+    "relative": {
+        "mean": 0.2354 / ((0.1278 + 0.1389 + 0.1534) / 3),
+        "third run": 0.2704 / ((0.1135 + 0.1194 + 0.137) / 3),
+    },
     "failures": {
         "errors": {"NF": 4, "RF": 0, "BF": 3, "SF": 3},
         "undemonstrated": {"NF": 499, "RF": 619, "BF": 827, "SF": 485},

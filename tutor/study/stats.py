@@ -85,7 +85,11 @@ def experiment1_stats(runs: pd.DataFrame) -> dict:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         aov = pg.rm_anova(
-            data=data, dv="eta", within="condition", subject="teacher", correction=True,
+            data=data,
+            dv="eta",
+            within="condition",
+            subject="teacher",
+            correction=True,
             detailed=True,
         )
         sph = pg.sphericity(data=data, dv="eta", within="condition", subject="teacher")

@@ -107,7 +107,7 @@ class MazeTeacher:
             if first_start is None:
                 first_start = np.asarray(start, float)
             own = task.nearest_condition(start)
-            model.belief.demonstrated[own] = True
+            model.belief.demonstrate(own)
             model.belief.observe(record.shown, record.passed[record.shown])
             if model.satisfied(m + 1):
                 meta["why_stopped"] = "satisfied"

@@ -17,13 +17,16 @@ condition (the rules are in :meth:`Belief.estimate`):
    neighbours pass too (within :data:`NEAR` of the grid's width), and so does every
    condition *between* seen successes (inside their convex hull); a realisation
    seen failing marks its neighbourhood as failing. What was seen last wins over
-   the prior; the latest sight of a condition replaces earlier ones.
+   the prior; the latest sight of a condition replaces earlier ones, and a
+   demonstration at a failure counts, for the teacher, as having mended it.
 
 The demonstration function (:class:`TeacherModel`) then picks where the next
 demonstration goes, again by one rule for every condition:
 
-a. if the robot was just seen failing where the teacher demonstrated, they take the
-   demo back and show it again (once);
+a. (pick-and-place) if the robot was just seen failing at the plant the teacher
+   demonstrated, or seeing it there makes them notice their demo went to another
+   plant (``notice_rate``), they take the demo back and show it again (at most
+   twice in a row);
 b. otherwise, if some realisation is remembered failing, they aim at the densest
    failing region (with their aiming imprecision ``aim_sd``);
 c. otherwise they follow their own plan of where demos should go (their idea of B,
@@ -73,6 +76,14 @@ class Belief:
         self.demonstrated = np.zeros(n, dtype=bool)
         gap = self.points[:, None, :] - self.points[None, :, :]
         self._near = np.linalg.norm(gap, axis=2) <= NEAR * self.width + 1e-12
+
+    def demonstrate(self, index: int) -> None:
+        """The teacher demonstrated condition ``index``: failures seen near it count as fixed.
+
+        (Until they see the robot again there: a demo where it failed is meant to mend it.)
+        """
+        self.demonstrated[index] = True
+        self.seen[self._near[index] & (self.seen == 0)] = -1
 
     def observe(self, shown, passed) -> None:
         """Remember what the robot was seen doing at the conditions ``shown``."""

@@ -7,7 +7,9 @@ changes only what they are shown and what that costs on the 15-minute clock:
 NF  nothing while teaching: they follow their own plan of plants and stop when their
     prior says the robot has had enough demos (or the time is up).
 RF  the robot replays the plant just demonstrated (25 s): a failed replay makes them
-    notice a bad demo (e.g. a slip to the wrong plant), take it back and redo it.
+    notice a bad demo (e.g. a slip to the wrong plant), take it back and redo it
+    (at most twice in a row). The same rule holds in every condition, but only RF
+    always shows the demonstrated plant.
 BF  the robot tries the four corner plants and the centre one after every demo
     (125 s): they read these five and aim the next demo at a failing one.
 SF  they ask the robot to try plants now and then (25 s each), choosing as novices
@@ -29,11 +31,13 @@ from ..tasks.pickplace_protocol import CONDITIONS, PickPlaceRun
 from .model import TeacherModel
 from .traits import TeacherTraits
 
-__all__ = ["PickPlaceTeacher", "PICKPLACE_CONDITIONS", "NOVICE_TEST_NEAR"]
+__all__ = ["PickPlaceTeacher", "PICKPLACE_CONDITIONS", "NOVICE_TEST_NEAR", "MAX_RETRIES"]
 
 PICKPLACE_CONDITIONS = tuple(CONDITIONS)
 #: SF: share of a novice's test choices that are a demonstrated plant or its neighbour
 NOVICE_TEST_NEAR = 0.8
+#: how many times in a row a teacher redoes a demo the robot was seen failing
+MAX_RETRIES = 2
 
 
 class PickPlaceTeacher:
@@ -52,19 +56,14 @@ class PickPlaceTeacher:
     # ---------------------------------------------------------------- the hand
 
     def demonstration(self, plant: int, rng, slip: bool = False) -> np.ndarray:
-        """A kinesthetic demo to ``plant`` with this teacher's hand wobble (t, x, y, z, g).
+        """A kinesthetic demo to ``plant`` (t, x, y, z, g).
 
-        A slip guides the arm to a neighbouring plant (the paper's demonstration error).
+        The hand's variability is the task's own model of a person guiding the arm
+        (:meth:`~tutor.tasks.pickplace.PickPlaceTask.demonstrate`); ``motor_noise`` is
+        not added on top (it would push correct grabs past half a plant's pitch). A
+        slip guides the arm to a neighbouring plant (the paper's demonstration error).
         """
-        raw = self.task.demonstrate(plant, rng, mistake="wrong_plant" if slip else None)
-        n = len(raw)
-        s = np.linspace(0.0, 1.0, n)
-        wobble = rng.normal(scale=self.traits.motor_noise, size=(n, 3))
-        kernel = np.hanning(21) / np.hanning(21).sum()
-        wobble = np.column_stack([np.convolve(wobble[:, j], kernel, mode="same") for j in range(3)])
-        raw = raw.copy()
-        raw[:, 1:4] += wobble * np.sin(np.pi * s)[:, None]
-        return raw
+        return self.task.demonstrate(plant, rng, mistake="wrong_plant" if slip else None)
 
     # ---------------------------------------------------------------- teaching
 
@@ -91,7 +90,7 @@ class PickPlaceTeacher:
         model = self._model(rng)
         meta = run.session.meta
         meta.update(targets=[], slips=0, retries=0)
-        retry = None
+        retry, tries = None, 0
         why_stopped = "time"
         while not run.finished:
             m = run.session.n_demos
@@ -107,20 +106,23 @@ class PickPlaceTeacher:
             record = run.demonstrate(plant, raw=self.demonstration(plant, rng, slip))
             meta["targets"].append(why)
             meta["slips"] += int(slip)
-            model.belief.demonstrated[plant] = True
+            model.belief.demonstrate(plant)
             model.belief.observe(record.shown, record.passed[record.shown])
+            fresh = set(record.shown.tolist())
             if condition == "SF":
-                self._self_test(run, model, rng)
-            # (a) the robot fails right at the plant just shown: take it back, show it again
-            seen = model.belief.seen[plant]
-            if seen == 0 and retry is None:
+                fresh |= self._self_test(run, model, rng)
+            # (a) watching the robot do the plant just shown: it fails, or the teacher
+            # notices their demo went to another plant: take it back, show it again
+            noticed = slip and rng.random() < t.notice_rate
+            failed = model.belief.seen[plant] == 0
+            if plant in fresh and (failed or noticed) and tries < MAX_RETRIES:
                 run.undo()
                 meta["targets"].pop()
                 model.belief.demonstrated[plant] = False
                 meta["retries"] += 1
-                retry = plant
+                retry, tries = plant, tries + 1
                 continue
-            retry = None
+            retry, tries = None, 0
             if model.satisfied(m + 1):
                 why_stopped = "satisfied"
                 break
@@ -131,10 +133,13 @@ class PickPlaceTeacher:
         run.finish()
         return run
 
-    def _self_test(self, run: PickPlaceRun, model: TeacherModel, rng) -> None:
-        """SF: maybe ask the robot to try one or two plants, chosen as a novice would."""
+    def _self_test(self, run: PickPlaceRun, model: TeacherModel, rng) -> set[int]:
+        """SF: maybe ask the robot to try one or two plants, chosen as a novice would.
+
+        Returns the plants tried (empty when none).
+        """
         if rng.random() >= self.traits.test_rate:
-            return
+            return set()
         k = int(rng.integers(1, 3))
         demonstrated = np.flatnonzero(model.belief.demonstrated)
         rows, cols = self.task.scene.rows, self.task.scene.cols
@@ -143,11 +148,13 @@ class PickPlaceTeacher:
             if demonstrated.size and rng.random() < NOVICE_TEST_NEAR:
                 r, c = divmod(int(rng.choice(demonstrated)), cols)
                 dr, dc = rng.integers(-1, 2, 2)
-                plants.append(int(np.clip(r + dr, 0, rows - 1) * cols + np.clip(c + dc, 0, cols - 1)))
+                r, c = np.clip(r + dr, 0, rows - 1), np.clip(c + dc, 0, cols - 1)
+                plants.append(int(r * cols + c))
             else:
                 plants.append(model.nearest(model.plan_point()))
         plants = sorted(set(plants))
         if run.realisation_seconds * len(plants) > run.remaining:
-            return
+            return set()
         passed = run.test(plants)
         model.belief.observe(plants, passed)
+        return set(plants)

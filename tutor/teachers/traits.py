@@ -53,8 +53,8 @@ class TeacherTraits:
         Imprecision when aiming at a place they chose (unit box, standard deviation):
         reading a red region off the picture, a circle, or which plant to pick.
     motor_noise : float
-        Wobble of the hand during a demonstration (metres, standard deviation of the
-        path's deviation).
+        Maze: wobble of the hand during a stroke (metres, standard deviation of the
+        path's deviation). Pick-and-place uses the task's own model of a guiding hand.
     slip_rate : float
         Chance that one demonstration is a slip: in the maze the stroke cuts an
         obstacle's corner; in pick-and-place the hand goes to a neighbouring plant.
@@ -68,6 +68,10 @@ class TeacherTraits:
         experimenter sets the target, the arm goes back to its start).
     test_rate : float
         Pick-and-place SF: chance of asking the robot to try plants after a demo.
+    notice_rate : float
+        Chance that, watching the robot perform the plant they just demonstrated,
+        they notice their demo went to the wrong plant (they then redo it). Only
+        possible when r includes that plant: always in RF, sometimes in BF and SF.
     """
 
     enough_maze: int
@@ -81,6 +85,7 @@ class TeacherTraits:
     patience: int
     setup_seconds: float
     test_rate: float
+    notice_rate: float
 
     def enough_demos(self, task: str) -> int:
         """The prior count for ``task`` ("maze" or "pickplace")."""
@@ -130,6 +135,9 @@ class Population:
         ``setup_seconds`` ~ uniform (s per pick-and-place demo).
     test_low, test_high
         ``test_rate`` ~ uniform.
+    notice_low, notice_high
+        ``notice_rate`` ~ uniform (the paper: replays "help them spot errors as they
+        happen"; its RF teachers left no wrong-plant demo).
     """
 
     enough_median_maze: float = 4.0
@@ -153,6 +161,8 @@ class Population:
     setup_high: float = 45.0
     test_low: float = 0.3
     test_high: float = 0.8
+    notice_low: float = 0.7
+    notice_high: float = 1.0
 
     def __post_init__(self):
         lo, hi = self.enough_range
@@ -172,6 +182,10 @@ class Population:
             (1 <= self.patience_low <= self.patience_high, "need 1 <= patience_low <= high"),
             (0 <= self.setup_low <= self.setup_high, "need 0 <= setup_low <= setup_high"),
             (0 <= self.test_low <= self.test_high <= 1, "need 0 <= test_low <= test_high <= 1"),
+            (
+                0 <= self.notice_low <= self.notice_high <= 1,
+                "need 0 <= notice_low <= notice_high <= 1",
+            ),
         ]
         for ok, message in checks:
             if not ok:
@@ -198,6 +212,7 @@ class Population:
             patience=int(rng.integers(self.patience_low, self.patience_high + 1)),
             setup_seconds=float(rng.uniform(self.setup_low, self.setup_high)),
             test_rate=float(rng.uniform(self.test_low, self.test_high)),
+            notice_rate=float(rng.uniform(self.notice_low, self.notice_high)),
         )
 
     def to_dict(self) -> dict:

@@ -1,0 +1,138 @@
+"""Figures of the simulated cohorts, laid out like the paper's (matplotlib).
+
+Each function takes the ``runs`` frame of a :class:`~tutor.study.cohort.CohortResult`
+(nothing else), draws the simulation and marks the paper's numbers beside it.
+"""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from . import paper
+
+__all__ = ["experiment1_figure", "experiment2_figure", "PAPER_MARK"]
+
+PAPER_MARK = {"marker": "D", "color": "#d62728", "s": 40, "zorder": 5}
+BOX = {"patch_artist": True, "widths": 0.55, "medianprops": {"color": "#d62728", "lw": 2}}
+
+
+def _conditions(runs: pd.DataFrame) -> list[str]:
+    cond = runs["condition"]
+    if hasattr(cond, "cat"):
+        return [c for c in cond.cat.categories if (cond == c).any()]
+    return list(dict.fromkeys(cond))
+
+
+def _boxes(ax, runs, column, conds, colour="#9ecae1"):
+    data = [runs.loc[runs.condition == c, column].to_numpy(float) for c in conds]
+    parts = ax.boxplot(data, tick_labels=conds, **BOX)
+    for patch in parts["boxes"]:
+        patch.set_facecolor(colour)
+    rng = np.random.default_rng(0)  # fixed jitter: the figure is the same every time
+    for i, d in enumerate(data, start=1):
+        ax.scatter(i + rng.uniform(-0.12, 0.12, len(d)), d, s=9, color="#08519c", alpha=0.6)
+
+
+def experiment1_figure(runs: pd.DataFrame):
+    """Experiment 1: eta per condition (box plots, paper's medians marked), demos, efficacy.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    conds = _conditions(runs)
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
+    ax = axes[0]
+    _boxes(ax, runs, "eta", conds)
+    med = paper.EXPERIMENT_1["median_eta"]
+    ax.scatter(
+        range(1, len(conds) + 1), [med[c] for c in conds], label="paper's median", **PAPER_MARK
+    )
+    ax.set_ylabel("teaching efficiency η (at 90 % coverage)")
+    ax.set_title(f"η per condition ({runs.teacher.nunique()} simulated teachers)")
+    ax.legend(loc="upper left", fontsize=8)
+    _boxes(axes[1], runs, "n_demos", conds, "#c7e9c0")
+    axes[1].set_ylabel("demonstrations given")
+    axes[1].set_title("(a) demonstrations per condition")
+    _boxes(axes[2], runs, "efficacy", conds, "#fdd0a2")
+    axes[2].set_ylabel("efficacy ε after the last demo")
+    axes[2].set_ylim(-0.03, 1.05)
+    axes[2].set_title("(b) efficacy per condition")
+    return fig
+
+
+def experiment2_figure(runs: pd.DataFrame):
+    """Experiment 2: mean eta per run and overall per condition, the paper's beside it.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    conds = _conditions(runs)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.4), layout="constrained")
+    ax = axes[0]
+    by_run = runs.pivot_table(
+        index="condition", columns="run", values="eta", aggfunc="mean", observed=True
+    )
+    n_runs = by_run.shape[1]
+    width = 0.8 / (n_runs + 1)
+    x = np.arange(len(conds))
+    shades = plt.cm.Blues(np.linspace(0.35, 0.75, n_runs))
+    for j, run in enumerate(by_run.columns):
+        ax.bar(
+            x + (j - n_runs / 2) * width,
+            by_run.loc[conds, run],
+            width,
+            color=shades[j],
+            label=f"run {run}",
+        )
+    overall = runs.groupby("condition", observed=True)["eta"].mean()
+    ax.bar(x + (n_runs / 2) * width, overall.loc[conds], width, color="#08306b", label="mean")
+    pm = paper.EXPERIMENT_2["mean_eta"]
+    p3 = paper.EXPERIMENT_2["third_run_eta"]
+    ax.scatter(x + (n_runs / 2) * width, [pm[c] for c in conds], label="paper: mean", **PAPER_MARK)
+    ax.scatter(
+        x + (n_runs / 2 - 1) * width,
+        [p3[c] for c in conds],
+        label="paper: run 3",
+        **{**PAPER_MARK, "marker": "x"},
+    )
+    ax.set_xticks(x, conds)
+    ax.set_ylabel("mean teaching efficiency η")
+    ax.set_title(f"η̄ per run and overall ({runs.teacher.nunique()} simulated teachers)")
+    ax.legend(fontsize=8, ncol=2)
+    ax = axes[1]
+    sums = runs.groupby("condition", observed=True)[["errors", "undemonstrated", "ambiguous"]]
+    sums = sums.sum().loc[conds]
+    fail = paper.EXPERIMENT_2["failures"]
+    kinds = ["errors", "undemonstrated", "ambiguous"]
+    share_sim = sums / sums.sum(axis=0).replace(0, np.nan)
+    share_paper = pd.DataFrame({k: fail[k] for k in kinds}).loc[conds]
+    share_paper = share_paper / share_paper.sum(axis=0)
+    xk = np.arange(len(kinds))
+    w = 0.8 / len(conds)
+    colours = plt.cm.Set2(np.arange(len(conds)))
+    for i, c in enumerate(conds):
+        ax.bar(
+            xk + (i - (len(conds) - 1) / 2) * w,
+            share_sim.loc[c, kinds].fillna(0),
+            w,
+            color=colours[i],
+            label=c,
+        )
+        ax.scatter(
+            xk + (i - (len(conds) - 1) / 2) * w,
+            share_paper.loc[c, kinds],
+            s=22,
+            color="k",
+            marker="_",
+            linewidths=2,
+            zorder=5,
+        )
+    ax.set_xticks(xk, ["demonstration\nerrors", "undemonstrated\nstates", "ambiguous\ndemos"])
+    ax.set_ylabel("share of all failures of that kind")
+    ax.set_title("Failures by condition (bars: simulation, black: paper)")
+    ax.legend(fontsize=8)
+    return fig

@@ -1,0 +1,174 @@
+"""Tables beside the paper's, files on disk, and robustness over seeds."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import paper, stats
+from .cohort import CohortResult, run_experiment
+
+__all__ = ["analyse", "format_report", "save_result", "robustness"]
+
+
+def analyse(result: CohortResult) -> dict:
+    """Statistics, tables, relative improvements and the paper's conclusions for a cohort."""
+    runs, exp = result.runs, result.experiment
+    st = stats.experiment1_stats(runs) if exp == 1 else stats.experiment2_stats(runs)
+    out = {
+        "stats": st,
+        "summary": stats.summary_table(runs, exp, st),
+        "relative": stats.relative_improvement(st, exp),
+        "conclusions": stats.conclusions(runs, exp, st),
+    }
+    if exp == 2:
+        out["failures"] = stats.failure_table(runs)
+    return out
+
+
+def _pct(x) -> str:
+    return "n/a" if x is None or not np.isfinite(x) else f"{100 * x:.1f} %"
+
+
+def format_report(result: CohortResult, analysis: dict) -> str:
+    """Plain-text report: every table beside the paper's numbers."""
+    exp, st = result.experiment, analysis["stats"]
+    n = result.runs.teacher.nunique()
+    lines = [f"Experiment {exp}: {n} simulated teachers, seed {result.seed}", ""]
+    lines.append(analysis["summary"].to_string(float_format=lambda v: f"{v:.3f}"))
+    lines.append("")
+    if exp == 1:
+        a, pa = st["anova"], paper.EXPERIMENT_1["anova"]
+        sph = "holds" if a["sphericity_ok"] else "violated: Greenhouse-Geisser p used"
+        lines.append(
+            f"Repeated-measures ANOVA: F({a['ddof1']},{a['ddof2']}) = {a['F']:.3f}, "
+            f"p = {a['p_used']:.3g}   (paper: F({pa['ddof1']},{pa['ddof2']}) = {pa['F']}, "
+            f"p = {pa['p']})"
+        )
+        lines.append(
+            f"Mauchly's sphericity: W = {a['sphericity_W']:.3f}, p = {a['sphericity_p']:.3g} "
+            f"({sph})"
+        )
+        lines.append("Pairwise (paired t, Bonferroni):")
+        for _, r in st["pairwise"].iterrows():
+            pp = paper.EXPERIMENT_1["pairwise_p"].get((r.A, r.B), float("nan"))
+            lines.append(f"  {r.A}-{r.B}: T = {r['T']:.2f}, p = {r.p_bonf:.3g}   (paper p = {pp})")
+        rel, prel = analysis["relative"], paper.EXPERIMENT_1["relative"]
+        lines.append(
+            "Relative improvement of median eta: "
+            + ", ".join(f"{k} {_pct(rel[k])} (paper {_pct(prel[k])})" for k in rel)
+            + "; the paper rounds to 'about 180 %'"
+        )
+        good = int((result.runs.query("condition == 'NF'").reached_target).sum())
+        lines.append(f"NF teachers reaching 90 %: {good} of {n} (paper: 7 of 30 did well)")
+    else:
+        a, pa = st["anova"], paper.EXPERIMENT_2["mixed_anova"]
+        for key in ("condition", "run", "interaction"):
+            r = a[key]
+            ref = pa[key]
+            ref_text = (
+                f"F({ref['ddof1']},{ref['ddof2']}) = {ref['F']}, p = {ref['p']}"
+                if isinstance(ref, dict)
+                else ref
+            )
+            lines.append(
+                f"Mixed ANOVA, {key}: F({r['ddof1']},{r['ddof2']}) = {r['F']:.3f}, "
+                f"p = {r['p']:.3g}   (paper: {ref_text})"
+            )
+        lines.append(f"Mauchly's sphericity (runs): p = {a['sphericity_p']:.3g} (paper p = 0.5372)")
+        lines.append("Pairwise, teachers' mean eta (Welch t, Bonferroni):")
+        for _, r in st["pairwise"].iterrows():
+            lines.append(f"  {r.A}-{r.B}: T = {r['T']:.2f}, p = {r.p_bonf:.3g}")
+        rel, prel = analysis["relative"], paper.EXPERIMENT_2["relative"]
+        lines.append(
+            "BF relative to the mean of NF, RF, SF: "
+            + ", ".join(f"{k} {_pct(rel[k])} (paper {_pct(prel[k])})" for k in rel)
+        )
+        lines.append("")
+        fail = analysis["failures"].copy()
+        ref = pd.DataFrame(paper.EXPERIMENT_2["failures"]).T[fail.columns]
+        both = fail.astype(str) + " (" + ref.astype(str) + ")"
+        lines.append("Failures over all teachers and runs: simulation (paper)")
+        lines.append(both.to_string())
+    lines.append("")
+    lines.append("The paper's conclusions on this cohort:")
+    for k, v in analysis["conclusions"].items():
+        lines.append(f"  {k}: {'holds' if v else 'DOES NOT HOLD'}")
+    return "\n".join(lines)
+
+
+def _jsonable(value):
+    if isinstance(value, pd.DataFrame):
+        return json.loads(value.to_json(orient="index"))
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+def save_result(result: CohortResult, analysis: dict, out, figures: bool = True) -> dict:
+    """Write ``runs.csv``, ``demos.csv``, ``summary.json``, ``report.txt`` and the figure.
+
+    Returns a dict of the paths written.
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = f"experiment{result.experiment}"
+    paths = {
+        "runs": out / f"{stem}_runs.csv",
+        "demos": out / f"{stem}_demos.csv",
+        "summary": out / f"{stem}_summary.json",
+        "report": out / f"{stem}_report.txt",
+    }
+    result.runs.to_csv(paths["runs"], index=False)
+    result.demos.to_csv(paths["demos"], index=False)
+    summary = {
+        "experiment": result.experiment,
+        "seed": result.seed,
+        "n_teachers": int(result.runs.teacher.nunique()),
+        "settings": result.settings.__dict__,
+        "paper": _jsonable(
+            {
+                str(k): v
+                for k, v in (
+                    paper.EXPERIMENT_1 if result.experiment == 1 else paper.EXPERIMENT_2
+                ).items()
+                if k != "pairwise_p"
+            }
+        ),
+        **_jsonable({k: v for k, v in analysis.items()}),
+    }
+    paths["summary"].write_text(json.dumps(summary, indent=2, default=str))
+    paths["report"].write_text(format_report(result, analysis) + "\n")
+    if figures:
+        import matplotlib.pyplot as plt
+
+        from .figures import experiment1_figure, experiment2_figure
+
+        draw = experiment1_figure if result.experiment == 1 else experiment2_figure
+        fig = draw(result.runs)
+        paths["figure"] = out / f"{stem}.png"
+        fig.savefig(paths["figure"], dpi=110)
+        plt.close(fig)
+    return paths
+
+
+def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> pd.DataFrame:
+    """Rerun a cohort for each seed; one row per seed: the conclusions and key numbers."""
+    rows = []
+    for seed in seeds:
+        result = run_experiment(experiment, seed=seed, n=n, workers=workers, progress=progress)
+        a = analyse(result)
+        row = {"seed": seed, **a["conclusions"]}
+        row["all hold"] = all(a["conclusions"].values())
+        row.update({f"relative {k}": v for k, v in a["relative"].items()})
+        key = "medians" if experiment == 1 else "means"
+        row.update({f"eta {c}": v for c, v in a["stats"][key].items()})
+        rows.append(row)
+    return pd.DataFrame(rows)
