@@ -1,0 +1,377 @@
+"""Simulated teachers (tutor.teachers), cohorts and their statistics (tutor.study).
+
+Small cases only: each teacher model on one run, reduced cohorts for reproducibility.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tutor.errors import InvalidParameterError
+from tutor.tasks.maze import MazeTask
+from tutor.tasks.maze_rules import advise_from
+from tutor.tasks.pickplace import PickPlaceTask
+from tutor.tasks.pickplace_protocol import PickPlaceRun
+from tutor.teachers.maze import MazeTeacher
+from tutor.teachers.model import CLUSTER, Belief
+from tutor.teachers.pickplace import MAX_RETRIES, PickPlaceTeacher
+from tutor.teachers.traits import DEFAULT_POPULATION, Population, TeacherTraits
+
+BASE = TeacherTraits(
+    enough_maze=4,
+    enough_pickplace=5,
+    plan_focus=(0.5, 0.5),
+    plan_spread=0.2,
+    aim_sd=0.02,
+    motor_noise=0.003,
+    slip_rate=0.0,
+    satisfaction=0.97,
+    patience=12,
+    setup_seconds=30.0,
+    test_rate=0.5,
+    notice_rate=0.9,
+)
+
+
+def traits(**kw) -> TeacherTraits:
+    return dataclasses.replace(BASE, **kw)
+
+
+@pytest.fixture(scope="module")
+def maze():
+    return MazeTask()
+
+
+@pytest.fixture(scope="module")
+def pickplace():
+    return PickPlaceTask(feasibility=None)
+
+
+# --------------------------------------------------------------------------- population
+
+
+def test_population_draws_are_seeded_and_in_range():
+    a = DEFAULT_POPULATION.sample(np.random.default_rng(7))
+    b = DEFAULT_POPULATION.sample(np.random.default_rng(7))
+    assert a == b
+    pop = DEFAULT_POPULATION
+    many = [pop.sample(np.random.default_rng(s)) for s in range(200)]
+    for t in many:
+        assert pop.enough_range[0] <= t.enough_maze <= pop.enough_range[1]
+        assert pop.enough_range[0] <= t.enough_pickplace <= pop.enough_range[1]
+        assert pop.aim_low <= t.aim_sd <= pop.aim_high
+        assert 0 <= t.slip_rate <= 1 and pop.patience_low <= t.patience <= pop.patience_high
+        assert all(0 <= f <= 1 for f in t.plan_focus)
+    # one personal optimism factor: the two priors move together
+    z = np.array([(t.enough_maze, t.enough_pickplace) for t in many], float)
+    assert np.corrcoef(z.T)[0, 1] > 0.8
+
+
+def test_population_rejects_impossible_settings():
+    with pytest.raises(InvalidParameterError, match="satisfaction"):
+        Population(satisfaction_low=0.9, satisfaction_high=1.2)
+    with pytest.raises(InvalidParameterError, match="enough_range"):
+        Population(enough_range=(5, 2))
+
+
+# --------------------------------------------------------------------------- belief (omega)
+
+
+def test_belief_prior_then_evidence():
+    pts = np.array([[x, y] for y in range(5) for x in range(5)], float)
+    b = Belief(pts, width=4.0, enough_demos=3)
+    assert not b.estimate(2).any() and b.estimate(3).all()  # the prior alone
+    b.demonstrate(0)
+    assert b.estimate(1)[0] and b.coverage(1) == pytest.approx(1 / 25)
+    # successes seen at three corners: everything between them is believed
+    b.observe([0, 4, 20], [True, True, True])
+    est = b.estimate(1)
+    assert est[12] and est[6]  # inside the triangle
+    assert not est[24]  # outside it and far from every success
+    # a failure seen marks its neighbourhood as failing, even after the prior says enough
+    b.observe([24], [False])
+    assert not b.estimate(5)[24] and b.estimate(5)[0]
+    assert np.allclose(b.worst_region(), pts[24])
+    # demonstrating there counts (for the teacher) as mending it
+    b.demonstrate(24)
+    assert b.worst_region() is None and b.estimate(5)[24]
+
+
+def test_worst_region_prefers_red_away_from_demos():
+    pts = np.array([[x, 0.0] for x in range(11)], float)
+    b = Belief(pts, width=10.0, enough_demos=5)
+    b.observe(range(11), [False] * 11)
+    b.demonstrated[0] = True
+    far = b.worst_region()
+    assert far[0] >= CLUSTER * 10  # all red: go where nothing was shown
+    inside = np.zeros(11, bool)
+    inside[:3] = True
+    assert b.worst_region(within=inside)[0] <= 2 + CLUSTER * 10
+
+
+# --------------------------------------------------------------------------- maze teachers
+
+
+def test_nf_maze_teacher_stops_at_its_prior(maze):
+    for enough in (2, 5):
+        s = MazeTeacher(traits(enough_maze=enough), maze).teach("NF", np.random.default_rng(1))
+        assert s.n_demos == enough
+        assert s.meta["why_stopped"] == "satisfied"
+        assert set(s.meta["targets"]) == {"plan"}
+        assert all(len(r.shown) == 0 for r in s.history)  # r is empty
+
+
+def test_vf_maze_teacher_aims_at_red(maze):
+    teacher = MazeTeacher(traits(enough_maze=2, aim_sd=0.01), maze)
+    s = teacher.teach("VF", np.random.default_rng(3))
+    assert s.meta["targets"][0] == "plan" and "red" in s.meta["targets"]
+    for k, why in enumerate(s.meta["targets"]):
+        if why != "red":
+            continue
+        before = s.history[k - 1]
+        start = maze.condition_of(s.demos[k])
+        gap = np.linalg.norm(maze.conditions[~before.passed] - start, axis=1).min()
+        assert gap <= 0.02, f"demo {k + 1} started {gap:.3f} m from the nearest red start"
+    # it stops on what it sees, not on its prior of 2 demos
+    assert s.latest.efficacy >= 0.9 or s.meta["why_stopped"] == "patience"
+
+
+def test_vr_maze_teacher_follows_the_rules(maze):
+    s = MazeTeacher(traits(), maze).teach("VR", np.random.default_rng(5))
+    assert s.meta["followed_rules"] and all(s.meta["followed_rules"])
+    # replay the rules: demo 2 starts within 4 cm of demo 1 (rule 2)
+    first = maze.condition_of(s.demos[0])
+    advice = advise_from(maze, s.history[0].passed, first)
+    if advice.rule == 2:
+        assert np.linalg.norm(maze.condition_of(s.demos[1]) - first) <= advice.radius + 1e-9
+
+
+def test_maze_teacher_same_traits_in_every_condition(maze):
+    teacher = MazeTeacher(traits(), maze)
+    runs = {c: teacher.teach(c, np.random.default_rng(11)) for c in ("NF", "VF", "VR")}
+    assert all(s.meta["condition"] == c for c, s in runs.items())
+    with pytest.raises(InvalidParameterError, match="NF, VF, VR"):
+        teacher.teach("BF", np.random.default_rng(0))
+
+
+def test_maze_slip_makes_an_incorrect_demo(maze):
+    t = MazeTeacher(traits(), maze)
+    rng = np.random.default_rng(2)
+    bad = maze.preprocess(t.stroke(np.array([0.1, 0.03]), rng, slip=True))
+    good = maze.preprocess(t.stroke(np.array([0.1, 0.03]), rng, slip=False))
+    assert not maze.judge_demo(bad, bad[0, 1:]).passed[0]
+    assert maze.judge_demo(good, good[0, 1:]).passed[0]
+
+
+# --------------------------------------------------------------------------- pick-and-place
+
+
+def test_rf_teacher_catches_a_wrong_plant_slip_after_the_replay(pickplace):
+    clumsy = traits(slip_rate=1.0, notice_rate=1.0, patience=1, setup_seconds=0.0)
+    rf = PickPlaceTeacher(clumsy, pickplace).teach("RF", np.random.default_rng(4))
+    assert rf.session.meta["retries"] == MAX_RETRIES  # noticed every slip it was shown
+    nf = PickPlaceTeacher(clumsy, pickplace).teach("NF", np.random.default_rng(4))
+    assert nf.session.meta["retries"] == 0  # nothing shown, nothing noticed
+    assert not nf.session.history[-1].demo_passed  # the wrong-plant demo stays
+
+
+def test_rf_teacher_keeps_correct_demos(pickplace):
+    careful = traits(slip_rate=0.0, notice_rate=1.0, patience=3, setup_seconds=0.0)
+    run = PickPlaceTeacher(careful, pickplace).teach("RF", np.random.default_rng(8))
+    assert all(r.demo_passed for r in run.session.history)
+    assert all(len(r.shown) == 1 for r in run.session.history)  # r = the replay
+
+
+def test_bf_teacher_pays_125_s_per_demo_under_the_cap(pickplace):
+    t = traits(enough_pickplace=12, satisfaction=1.0, patience=12, setup_seconds=30.0)
+    run = PickPlaceTeacher(t, pickplace).teach("BF", np.random.default_rng(6))
+    s = run.session
+    assert all(len(r.shown) == 5 for r in s.history)
+    robot = 125.0 * s.n_demos
+    assert run.elapsed >= robot + sum(s.meta["demo_seconds"]) + 30.0 * s.n_demos - 1e-6
+    if s.meta["why_stopped"] == "time":
+        assert run.elapsed >= run.cap
+        # 30 s setup + ~10 s demo + 125 s: at most 6 demos fit in 15 minutes
+        assert s.n_demos <= 6
+
+
+def test_sf_teacher_picks_tests_near_its_demos(pickplace):
+    t = traits(test_rate=1.0, patience=4, enough_pickplace=4)
+    run = PickPlaceTeacher(t, pickplace).teach("SF", np.random.default_rng(9))
+    tests = [p for test in run.session.meta["tests"] for p in test["plants"]]
+    assert tests, "an SF teacher with test_rate 1 asks for tests"
+    demos = {pickplace.nearest_condition(c) for c in run.session.conditions}
+    cols = pickplace.scene.cols
+
+    def near(p):
+        return any(abs(p // cols - d // cols) <= 1 and abs(p % cols - d % cols) <= 1 for d in demos)
+
+    assert np.mean([near(p) for p in tests]) >= 0.5
+
+
+def test_protocol_spend_and_undo_keep_the_time(pickplace):
+    run = PickPlaceRun("RF", pickplace)
+    run.spend(40.0)
+    run.demonstrate(44, rng=np.random.default_rng(0))
+    used = run.elapsed
+    assert used == pytest.approx(40.0 + run.session.meta["demo_seconds"][0] + 25.0)
+    assert run.undo() is None and run.session.n_demos == 0
+    assert run.elapsed == pytest.approx(used)  # taking a demo back does not give time back
+    with pytest.raises(InvalidParameterError):
+        run.spend(-1)
+
+
+# --------------------------------------------------------------------------- cohorts
+
+
+def test_same_seed_same_numbers_whatever_the_workers():
+    from tutor.study.cohort import run_experiment
+
+    a = run_experiment(1, seed=3, n=3, workers=1, progress=False)
+    b = run_experiment(1, seed=3, n=3, workers=2, progress=False)
+    pd.testing.assert_frame_equal(a.runs, b.runs)
+    pd.testing.assert_frame_equal(a.demos, b.demos)
+    c = run_experiment(1, seed=4, n=3, workers=2, progress=False)
+    assert not a.runs["eta"].equals(c.runs["eta"])
+
+
+def test_experiment2_reduced_cohort_is_reproducible():
+    from tutor.study.cohort import run_experiment
+
+    a = run_experiment(2, seed=1, n=8, workers=2, progress=False)
+    b = run_experiment(2, seed=1, n=8, workers=2, progress=False)
+    pd.testing.assert_frame_equal(a.runs, b.runs)
+    assert len(a.runs) == 8 * 3
+    assert a.runs.groupby("condition", observed=True).teacher.nunique().tolist() == [2] * 4
+    assert (a.runs.seconds <= 900 + 300).all()  # the last demo may run past the cap
+
+
+@pytest.mark.parametrize(
+    ("experiment", "n", "seed", "match"),
+    [
+        (3, None, 0, "experiment must be 1"),
+        (1, 1, 0, "at least 2 teachers"),
+        (2, 10, 0, "multiple of 4"),
+        (1, None, -1, "seed must be"),
+        (1, 2.5, 0, "integer"),
+    ],
+)
+def test_bad_requests_are_named_errors(experiment, n, seed, match):
+    from tutor.study.cohort import check_request
+
+    with pytest.raises(InvalidParameterError, match=match):
+        check_request(experiment, n, seed)
+
+
+def test_cli_reports_bad_input_and_writes_results(tmp_path, capsys):
+    from tutor.__main__ import main
+
+    assert main(["reproduce", "--experiment", "3", "--out", str(tmp_path)]) == 2
+    assert "InvalidParameterError" in capsys.readouterr().err
+    assert main(["reproduce", "--experiment", "1", "--seed", "-2", "--out", str(tmp_path)]) == 2
+    code = main(
+        [
+            "reproduce",
+            "--experiment",
+            "1",
+            "--n",
+            "3",
+            "--seed",
+            "2",
+            "--out",
+            str(tmp_path),
+            "--workers",
+            "1",
+            "--no-progress",
+        ]
+    )
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "paper" in out and "Repeated-measures ANOVA" in out
+    for name in ("runs.csv", "demos.csv", "summary.json", "report.txt", ".png"):
+        assert (tmp_path / f"experiment1_{name}").exists() or (
+            tmp_path / f"experiment1{name}"
+        ).exists()
+
+
+# --------------------------------------------------------------------------- statistics
+
+
+def _synthetic_within(effect: float, n: int = 12, seed: int = 0) -> pd.DataFrame:
+    rng = np.random.default_rng(seed)
+    rows = []
+    for t in range(n):
+        base = rng.normal(0.1, 0.02)
+        for cond, shift in (("NF", 0.0), ("VF", effect), ("VR", effect)):
+            eta = base + shift + rng.normal(0, 0.01)
+            rows.append(
+                {
+                    "teacher": t,
+                    "condition": cond,
+                    "run": 1,
+                    "eta": eta,
+                    "n_demos": 5,
+                    "efficacy": min(1, 5 * eta),
+                    "reached_target": True,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def test_experiment1_stats_on_a_synthetic_frame():
+    from tutor.study import stats
+
+    st = stats.experiment1_stats(_synthetic_within(0.08))
+    a = st["anova"]
+    assert (a["ddof1"], a["ddof2"]) == (2, 22) and a["p"] < 1e-6
+    assert 0 <= a["sphericity_p"] <= 1
+    assert set(zip(st["pairwise"].A, st["pairwise"].B, strict=True)) == {
+        ("NF", "VF"),
+        ("NF", "VR"),
+        ("VF", "VR"),
+    }
+    c = stats.conclusions(_synthetic_within(0.08), 1)
+    assert c == {"NF<VF": True, "NF<VR": True, "VF~VR": True}
+    assert not stats.conclusions(_synthetic_within(0.0), 1)["NF<VF"]
+    rel = stats.relative_improvement(st, 1)
+    assert rel["VF/NF"] > 1.5
+
+
+def test_experiment2_stats_and_failure_table_on_a_synthetic_frame():
+    from tutor.study import stats
+
+    rng = np.random.default_rng(1)
+    rows = []
+    for t in range(16):
+        cond = ("NF", "RF", "BF", "SF")[t // 4]
+        for run in (1, 2, 3):
+            eta = (0.25 if cond == "BF" else 0.12) + rng.normal(0, 0.02)
+            rows.append(
+                {
+                    "teacher": t,
+                    "condition": cond,
+                    "run": run,
+                    "eta": eta,
+                    "n_demos": 4,
+                    "efficacy": 4 * eta,
+                    "seconds": 600.0,
+                    "errors": int(cond != "RF"),
+                    "undemonstrated": 30 if cond == "BF" else 10,
+                    "ambiguous": 0 if cond == "BF" else 2,
+                }
+            )
+    runs = pd.DataFrame(rows)
+    st = stats.experiment2_stats(runs)
+    assert st["anova"]["condition"]["ddof1"] == 3 and st["anova"]["condition"]["p"] < 1e-4
+    assert st["anova"]["interaction"]["ddof1"] == 6
+    table = stats.failure_table(runs)
+    assert table.loc["undemonstrated", "BF"] == 12 * 30
+    assert list(table.columns) == ["NF", "RF", "BF", "SF"]
+    assert all(stats.conclusions(runs, 2, st).values())
+    assert stats.relative_improvement(st, 2)["mean"] == pytest.approx(
+        st["means"]["BF"] / np.mean([st["means"][c] for c in ("NF", "RF", "SF")])
+    )
