@@ -82,8 +82,10 @@ TRAY = "#5b5b5b"
 BIN = "#8c8c8c"
 STEM = "#5a7a3a"
 
-#: Where the camera sits (m, base frame); it looks at the robot's base (the origin).
-CAMERA_POSITION = (0.95, -0.8, 0.75)
+#: Where the camera sits (m) relative to the point it looks at, the middle of the scene
+#: (:meth:`Scene3D.scene_centre`). Meshcat's camera orbits the viewer's origin, so the
+#: whole scene is shifted to put its middle there.
+CAMERA_POSITION = (0.75, -0.7, 0.62)
 ROOT = "/meshcat"
 DYNAMIC = "/meshcat/lfd"  # everything one Scene3D draws itself (the robot is shared)
 
@@ -397,6 +399,7 @@ class Scene3D:
         vis, sc = self.vis, self.scene
         vis["/Grid"].set_property("visible", False)
         vis["/Axes"].set_property("visible", False)
+        vis.set_transform(tf.translation_matrix(-self.scene_centre()))
         x, y, z = CAMERA_POSITION
         vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
         colours = {"table": TABLE, "tray": TRAY}
@@ -427,6 +430,12 @@ class Scene3D:
         hand["closed"].set_transform(tf.scale_matrix(1e-3))
         p, _ = self._get_arm().fk(sc.start_configuration)
         hand.set_transform(tf.translation_matrix(p))
+
+    def scene_centre(self) -> np.ndarray:
+        """The point the camera looks at (3,): between the robot's base, the tray and the bin."""
+        sc = self.scene
+        mid = (sc.tray_center[:2] + sc.bin_center[:2]) / 2
+        return np.array([mid[0] / 2 + 0.1, mid[1], 0.2])
 
     def _get_arm(self):
         if self._arm is None:
