@@ -99,6 +99,23 @@ def test_no_gain_from_a_distinct_demo_is_incorrect(delta, previous):
     assert ("fell from 50% to 40%" if delta < 0 else "stayed at 50%") in w.message
 
 
+def test_a_first_demo_that_teaches_nothing_says_so_without_other_demos():
+    w = demo_warnings(
+        1,
+        demo_passed=True,
+        demo_reason="",
+        delta=0.0,
+        previous=0.0,
+        similarity=float("inf"),
+        nearest=None,
+        ambiguity_distance=0.01,
+        thresholds=Thresholds(),
+    )
+    assert [x.kind for x in w] == [INCORRECT]
+    assert "stayed at 0%" in w[0].message and "other demos" not in w[0].message
+    assert "give another from a different place" in w[0].message
+
+
 def test_no_gain_at_full_efficacy_is_not_a_failure():
     assert _warn(delta=0.0, previous=1.0) == []
     (w,) = _warn(delta=-0.2, previous=1.0)

@@ -197,14 +197,18 @@ def demo_warnings(
             )
         else:
             advice = "check that it shows the task the way you meant; undo it if not."
-        return [
-            TeachingWarning(
-                INCORRECT,
-                f"Demo {m} made things no better ({change}) although it differs from your "
-                f"other demos: {advice}",
-                demo=m,
+        if m == 1:
+            text = (
+                f"Demo 1 made things no better ({change}): the robot fails even where you "
+                "showed it. Check that the demo shows the task the way you meant; if it does, "
+                "one example is not enough here: give another from a different place."
             )
-        ]
+        else:
+            text = (
+                f"Demo {m} made things no better ({change}) although it differs from your "
+                f"other demos: {advice}"
+            )
+        return [TeachingWarning(INCORRECT, text, demo=m)]
     return []
 
 
