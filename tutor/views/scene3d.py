@@ -217,9 +217,7 @@ class SceneRecorder:
         if self.live is None:
             return
         if clear is not None:
-            import umsgpack
-
-            self._forward("delete", clear, umsgpack.packb({"type": "delete", "path": clear}))
+            self._forward("delete", clear, _DELETE(clear))
         has_animation = False
         for kind, path, packed in self.commands():
             self._forward(kind, path, packed)
@@ -234,6 +232,12 @@ def _EMPTY_ANIMATION() -> bytes:  # noqa: N802 - a constant, computed once
 
     empty = {"type": "set_animation", "animations": [], "options": {"play": False}, "path": ""}
     return umsgpack.packb(empty)
+
+
+def _DELETE(path: str) -> bytes:  # noqa: N802 - like _EMPTY_ANIMATION
+    import umsgpack
+
+    return umsgpack.packb({"type": "delete", "path": path})
 
 
 def _frame_commands(commands) -> bytes:
@@ -372,9 +376,13 @@ class Scene3D:
         self.animation: AnimationInfo | None = None
         live = None
         if self.mode == "live":
-            from .meshcat_server import visualizer
+            from .meshcat_server import MeshcatServerError, visualizer
 
-            live = visualizer(timeout=live_timeout).window
+            try:
+                live = visualizer(timeout=live_timeout).window
+            except (MeshcatServerError, OSError) as exc:
+                self.mode = "static"
+                self.message = f"No live 3-D viewer ({exc}): showing a snapshot instead."
         self.recorder = SceneRecorder(live)
         import meshcat
 
@@ -384,9 +392,10 @@ class Scene3D:
         self._arm = None
         self._widget = None
         self._shown_key = None
+        self._claim_live(fresh=True)  # what follows streams to the live viewer as drawn
         self._draw_static_scene()
         self.set_status(np.full(len(task.conditions), "unknown", dtype=object))
-        self._claim_live()
+        self._check_live()
 
     # ------------------------------------------------------------------ building
 
@@ -658,15 +667,22 @@ class Scene3D:
 
     # ------------------------------------------------------------------ output
 
-    def _claim_live(self) -> None:
-        """Make the shared live viewer show this scene (another Scene3D may have it)."""
+    def _claim_live(self, fresh: bool = False) -> None:
+        """Make the shared live viewer show this scene (another Scene3D may have it).
+
+        ``fresh``: nothing is drawn yet; only clear what another scene left.
+        """
         global _LIVE_OWNER
         rec = self.recorder
         if rec.live is None:
             self._check_live()
             return
         with _LIVE_LOCK:
-            if _LIVE_OWNER is not self:
+            if fresh:
+                rec._forward("delete", DYNAMIC, _DELETE(DYNAMIC))
+                rec._forward("set_animation", "", _EMPTY_ANIMATION())
+                _LIVE_OWNER = self
+            elif _LIVE_OWNER is not self:
                 rec.replay_to_live(clear=DYNAMIC)
                 _LIVE_OWNER = self
         self._check_live()
