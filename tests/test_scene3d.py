@@ -23,7 +23,7 @@ from tutor.tasks.pickplace import PickPlaceTask
 from tutor.views import meshcat_server
 from tutor.views.meshcat_server import LOOPBACK, get_server, start_server, visualizer
 from tutor.views.pickplace_app import PickPlaceTutor, tray_status
-from tutor.views.scene3d import STATUS_COLOURS, Scene3D, SceneRecorder
+from tutor.views.scene3d import STATUS_COLOURS, Scene3D, SceneRecorder, choose_mode
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -229,6 +229,23 @@ def test_headless_scene_is_static_without_a_server(task, monkeypatch, tmp_path):
     assert sum(p.startswith("/meshcat/lfd/plants/") and p.endswith("/ball") for p in paths) == 100
     widget = scene.widget
     assert "srcdoc=" in widget.children[1].value
+
+
+def test_mode_is_static_where_the_browser_cannot_reach_loopback(monkeypatch):
+    for var in ("TUTOR_HEADLESS", "JUPYTERHUB_SERVICE_PREFIX", "BINDER_SERVICE_HOST"):
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.delenv("VOILA_REQUEST_URL", raising=False)
+    assert choose_mode() == "live" and choose_mode("static") == "static"
+    monkeypatch.setenv("VOILA_REQUEST_URL", "http://localhost:8866/")
+    assert choose_mode() == "live"
+    monkeypatch.setenv("VOILA_REQUEST_URL", "http://192.0.2.7:8866/voila/render/03.ipynb")
+    assert choose_mode() == "static"
+    monkeypatch.delenv("VOILA_REQUEST_URL")
+    monkeypatch.setenv("JUPYTERHUB_SERVICE_PREFIX", "/user/ada/")
+    assert choose_mode() == "static" and choose_mode("live") == "live"
+    monkeypatch.delenv("JUPYTERHUB_SERVICE_PREFIX")
+    monkeypatch.setenv("TUTOR_HEADLESS", "1")
+    assert choose_mode() == "static"
 
 
 def test_bad_input_is_named(task):

@@ -55,6 +55,7 @@ import threading
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from urllib.parse import urlparse
 
 import numpy as np
 
@@ -297,14 +298,17 @@ def choose_mode(mode: str = "auto") -> str:
     """``"live"`` or ``"static"`` for ``mode`` in {"auto", "live", "static"}.
 
     Auto is static when headless (``TUTOR_HEADLESS=1``), behind JupyterHub or on
-    Binder (the browser is elsewhere, and the viewer is on the kernel's loopback),
-    and live otherwise.
+    Binder, or in Voila opened from another machine (the live viewer is on the
+    kernel's loopback, out of reach of a browser elsewhere), and live otherwise.
     """
     if mode not in ("auto", "live", "static"):
         raise InvalidParameterError(f"mode must be 'auto', 'live' or 'static', got {mode!r}")
     if mode != "auto":
         return mode
     remote = any(k in os.environ for k in ("JUPYTERHUB_SERVICE_PREFIX", "BINDER_SERVICE_HOST"))
+    voila = os.environ.get("VOILA_REQUEST_URL")  # the address the browser asked Voila for
+    if voila and urlparse(voila).hostname not in ("127.0.0.1", "localhost", "::1"):
+        remote = True
     return "static" if headless() or remote else "live"
 
 
