@@ -75,7 +75,8 @@ class PickPlaceRun:
         shown = sum(len(r.shown) for r in self.session.history)
         tested = sum(len(t["plants"]) for t in meta["tests"] if not t["after_run"])
         other = float(meta.get("other_seconds", 0.0))
-        return float(sum(meta["demo_seconds"])) + self.realisation_seconds * (shown + tested) + other
+        robot = self.realisation_seconds * (shown + tested)
+        return float(sum(meta["demo_seconds"])) + robot + other
 
     @property
     def remaining(self) -> float:
