@@ -34,6 +34,7 @@ BASE = TeacherTraits(
     setup_seconds=30.0,
     test_rate=0.5,
     notice_rate=0.9,
+    repeat_rate=0.0,
 )
 
 
@@ -111,6 +112,24 @@ def test_worst_region_prefers_red_away_from_demos():
     inside = np.zeros(11, bool)
     inside[:3] = True
     assert b.worst_region(within=inside)[0] <= 2 + CLUSTER * 10
+
+
+def test_plan_repeats_on_purpose_and_starts_from_lessons():
+    from tutor.teachers.model import TeacherModel
+
+    pts = np.array([[x, y] for y in range(5) for x in range(5)], float)
+
+    def model(**kw):
+        return TeacherModel(traits(**kw), np.random.default_rng(0), pts, (0, 0), (4, 4), 3)
+
+    never = model(repeat_rate=0.0)
+    assert all(never.nearest(never.plan_point(avoid=[12])) != 12 for _ in range(20))
+    always = model(repeat_rate=1.0)
+    assert always.nearest(always.plan_point(avoid=[7])) == 7
+    remembering = model()
+    remembering.lessons = [3, 20, 4]
+    firsts = [remembering.nearest(remembering.plan_point(avoid=[20])) for _ in range(2)]
+    assert firsts == [3, 4]  # remembered failures first, skipping what was demonstrated
 
 
 # --------------------------------------------------------------------------- maze teachers
@@ -211,6 +230,19 @@ def test_sf_teacher_picks_tests_near_its_demos(pickplace):
         return any(abs(p // cols - d // cols) <= 1 and abs(p % cols - d % cols) <= 1 for d in demos)
 
     assert np.mean([near(p) for p in tests]) >= 0.5
+
+
+def test_teacher_remembers_failures_between_runs(pickplace):
+    teacher = PickPlaceTeacher(traits(patience=2, enough_pickplace=2), pickplace)
+    run1 = teacher.teach("BF", np.random.default_rng(12))
+    seen_failing = [int(i) for r in run1.session.history for i in r.shown[~r.passed[r.shown]]]
+    assert teacher.lessons and set(seen_failing) <= set(teacher.lessons)
+    run2 = teacher.teach("BF", np.random.default_rng(13))
+    first = pickplace.nearest_condition(run2.session.conditions[0])
+    assert first == run1.session.meta["lessons"][0]
+    nf = PickPlaceTeacher(traits(patience=2, enough_pickplace=2), pickplace)
+    run = nf.teach("NF", np.random.default_rng(14))
+    assert [t["after_run"] for t in run.session.meta["tests"]] == [True]  # tests after the run
 
 
 def test_protocol_spend_and_undo_keep_the_time(pickplace):

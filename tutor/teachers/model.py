@@ -30,7 +30,11 @@ a. (pick-and-place) if the robot was just seen failing at the plant the teacher
 b. otherwise, if some realisation is remembered failing, they aim at the densest
    failing region (with their aiming imprecision ``aim_sd``);
 c. otherwise they follow their own plan of where demos should go (their idea of B,
-   :math:`\tilde B`: around ``plan_focus`` with scatter ``plan_spread``).
+   :math:`\tilde B`: around ``plan_focus`` with scatter ``plan_spread``), now and then
+   repeating a demo on purpose (``repeat_rate``).
+
+Between runs (Experiment 2) the teacher remembers where they saw the robot fail and
+starts the next run's plan there: r can change Q (the paper's hypothesis H4).
 
 They stop when the share of B^ they believe succeeds reaches ``satisfaction``, when
 ``patience`` runs out, or (pick-and-place) when the 15-minute clock does.
@@ -74,6 +78,8 @@ class Belief:
         self.seen = np.full(n, -1, dtype=np.int8)
         #: conditions the teacher has demonstrated (and not taken back)
         self.demonstrated = np.zeros(n, dtype=bool)
+        #: every condition seen failing, in the order first seen (what they may remember)
+        self.failures_seen: list[int] = []
         gap = self.points[:, None, :] - self.points[None, :, :]
         self._near = np.linalg.norm(gap, axis=2) <= NEAR * self.width + 1e-12
 
@@ -88,7 +94,11 @@ class Belief:
     def observe(self, shown, passed) -> None:
         """Remember what the robot was seen doing at the conditions ``shown``."""
         shown = np.asarray(shown, dtype=int)
-        self.seen[shown] = np.asarray(passed, dtype=bool).astype(np.int8)
+        passed = np.asarray(passed, dtype=bool)
+        self.seen[shown] = passed.astype(np.int8)
+        for index in shown[~passed]:
+            if int(index) not in self.failures_seen:
+                self.failures_seen.append(int(index))
 
     def estimate(self, n_demos: int) -> np.ndarray:
         r"""R~: bool (n,), whether the teacher believes the robot succeeds at each condition."""
@@ -168,15 +178,29 @@ class TeacherModel:
         self.upper = np.asarray(upper, dtype=float)
         self.width = float(self.upper[0] - self.lower[0])
         self.belief = Belief(self.points, self.width, enough_demos)
+        #: conditions to demonstrate first, remembered from an earlier run
+        self.lessons: list[int] = []
 
     # ------------------------------------------------------------- Omega pieces
 
     def plan_point(self, avoid=()) -> np.ndarray:
-        """The next demo from the teacher's own plan (their B~ and habits)."""
+        """The next demo from the teacher's own plan (their B~ and habits).
+
+        First the places remembered from an earlier run (:attr:`lessons`) not yet
+        demonstrated; else, with chance ``repeat_rate``, one of the demos already given
+        (``avoid``) again; else a point around ``plan_focus`` (redrawn up to three times
+        if it lands on a demonstrated condition).
+        """
         t = self.traits
-        avoid = list(avoid)
+        avoid = [int(i) for i in avoid]
+        while self.lessons:
+            index = self.lessons.pop(0)
+            if index not in avoid:
+                return self.points[index].copy()
+        if avoid and self.rng.random() < t.repeat_rate:
+            return self.points[int(self.rng.choice(avoid))].copy()
         point = None
-        for _ in range(4):  # people do not mean to repeat a demo exactly
+        for _ in range(4):  # otherwise people do not mean to repeat a demo exactly
             unit = np.clip(np.asarray(t.plan_focus) + self.rng.normal(0, t.plan_spread, 2), 0, 1)
             point = self.lower + unit * (self.upper - self.lower)
             if not avoid or self.nearest(point) not in avoid:

@@ -5,7 +5,8 @@ One :class:`PickPlaceTeacher` (one person's traits) teaches three runs of
 changes only what they are shown and what that costs on the 15-minute clock:
 
 NF  nothing while teaching: they follow their own plan of plants and stop when their
-    prior says the robot has had enough demos (or the time is up).
+    prior says the robot has had enough demos (or the time is up); after the run they
+    may try a few plants of their choice.
 RF  the robot replays the plant just demonstrated (25 s): a failed replay makes them
     notice a bad demo (e.g. a slip to the wrong plant), take it back and redo it
     (at most twice in a row). The same rule holds in every condition, but only RF
@@ -14,6 +15,9 @@ BF  the robot tries the four corner plants and the centre one after every demo
     (125 s): they read these five and aim the next demo at a failing one.
 SF  they ask the robot to try plants now and then (25 s each), choosing as novices
     do: mostly plants they demonstrated or their neighbours.
+
+Between runs a teacher remembers the plants they saw the robot fail at (during the
+run, or for NF in the tests they choose after it) and starts the next run's plan there.
 
 Every teacher also spends ``setup_seconds`` per demo (pointing at the plant, the
 experimenter setting the target, the arm returning to its start) in every condition.
@@ -52,6 +56,8 @@ class PickPlaceTeacher:
     def __init__(self, traits: TeacherTraits, task: PickPlaceTask | None = None):
         self.traits = traits
         self.task = PickPlaceTask() if task is None else task
+        #: plants seen failing in the previous run: the next run's plan starts there
+        self.lessons: list[int] = []
 
     # ---------------------------------------------------------------- the hand
 
@@ -88,6 +94,7 @@ class PickPlaceTeacher:
         t = self.traits
         run = PickPlaceRun(condition, self.task) if run is None else run
         model = self._model(rng)
+        model.lessons = list(self.lessons)
         meta = run.session.meta
         meta.update(targets=[], slips=0, retries=0)
         retry, tries = None, 0
@@ -131,14 +138,20 @@ class PickPlaceTeacher:
                 break
         meta["why_stopped"] = why_stopped
         run.finish()
+        if condition == "NF" and run.session.n_demos:
+            # NF: self-chosen realisations only after the run (chosen as novices do)
+            self._self_test(run, model, rng, always=True)
+        self.lessons = list(model.belief.failures_seen)
+        meta["lessons"] = list(self.lessons)
         return run
 
-    def _self_test(self, run: PickPlaceRun, model: TeacherModel, rng) -> set[int]:
-        """SF: maybe ask the robot to try one or two plants, chosen as a novice would.
+    def _self_test(self, run: PickPlaceRun, model: TeacherModel, rng, always=False) -> set[int]:
+        """Maybe ask the robot to try one or two plants, chosen as a novice would.
 
+        SF during the run (with chance ``test_rate``); NF after it (``always``).
         Returns the plants tried (empty when none).
         """
-        if rng.random() >= self.traits.test_rate:
+        if not always and rng.random() >= self.traits.test_rate:
             return set()
         k = int(rng.integers(1, 3))
         demonstrated = np.flatnonzero(model.belief.demonstrated)
@@ -153,7 +166,7 @@ class PickPlaceTeacher:
             else:
                 plants.append(model.nearest(model.plan_point()))
         plants = sorted(set(plants))
-        if run.realisation_seconds * len(plants) > run.remaining:
+        if not run.finished and run.realisation_seconds * len(plants) > run.remaining:
             return set()
         passed = run.test(plants)
         model.belief.observe(plants, passed)

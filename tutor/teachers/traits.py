@@ -72,6 +72,9 @@ class TeacherTraits:
         Chance that, watching the robot perform the plant they just demonstrated,
         they notice their demo went to the wrong plant (they then redo it). Only
         possible when r includes that plant: always in RF, sometimes in BF and SF.
+    repeat_rate : float
+        Chance that a demo from their own plan deliberately repeats one they already
+        gave ("showing it again helps"): the paper's ambiguous demonstrations.
     """
 
     enough_maze: int
@@ -86,6 +89,7 @@ class TeacherTraits:
     setup_seconds: float
     test_rate: float
     notice_rate: float
+    repeat_rate: float
 
     def enough_demos(self, task: str) -> int:
         """The prior count for ``task`` ("maze" or "pickplace")."""
@@ -138,6 +142,9 @@ class Population:
     notice_low, notice_high
         ``notice_rate`` ~ uniform (the paper: replays "help them spot errors as they
         happen"; its RF teachers left no wrong-plant demo).
+    repeat_a, repeat_b
+        ``repeat_rate`` ~ beta(a, b), mean 0.15: the paper counts ambiguous demos
+        (demos that add nothing, e.g. co-located ones) in every condition.
     """
 
     enough_median_maze: float = 4.0
@@ -163,6 +170,8 @@ class Population:
     test_high: float = 0.8
     notice_low: float = 0.7
     notice_high: float = 1.0
+    repeat_a: float = 1.5
+    repeat_b: float = 8.5
 
     def __post_init__(self):
         lo, hi = self.enough_range
@@ -186,6 +195,7 @@ class Population:
                 0 <= self.notice_low <= self.notice_high <= 1,
                 "need 0 <= notice_low <= notice_high <= 1",
             ),
+            (self.repeat_a > 0 and self.repeat_b > 0, "repeat_a and repeat_b must be > 0"),
         ]
         for ok, message in checks:
             if not ok:
@@ -213,6 +223,7 @@ class Population:
             setup_seconds=float(rng.uniform(self.setup_low, self.setup_high)),
             test_rate=float(rng.uniform(self.test_low, self.test_high)),
             notice_rate=float(rng.uniform(self.notice_low, self.notice_high)),
+            repeat_rate=float(rng.beta(self.repeat_a, self.repeat_b)),
         )
 
     def to_dict(self) -> dict:
