@@ -227,8 +227,8 @@ def test_headless_scene_is_static_without_a_server(task, monkeypatch, tmp_path):
     paths = {c.get("path") for c in commands}
     assert "/meshcat/robot/visuals/panda_link0_0" in paths
     assert sum(p.startswith("/meshcat/lfd/plants/") and p.endswith("/ball") for p in paths) == 100
-    widget = scene.widget
-    assert "srcdoc=" in widget.children[1].value
+    view = scene.widget.children[1]
+    assert "MeshCat.Viewer" in view.page and 'scene-data">' not in view.page  # no scene in it
 
 
 def test_mode_is_static_where_the_browser_cannot_reach_loopback(monkeypatch):
@@ -305,14 +305,59 @@ def test_tutor_updates_the_scene(task):
     for i in (12, 0, 99):
         colour = balls[f"/meshcat/lfd/plants/{i}/ball"]["object"]["materials"][0]["color"]
         assert colour == int(STATUS_COLOURS[status[i]].lstrip("#"), 16)
-    # selecting another plant changes nothing in 3-D (no replay, no new export)
-    before = scene._view.value
+    # selecting another plant changes nothing in 3-D (no replay, nothing sent)
+    sent = _open_view(scene)
     tutor.select(3)
-    assert scene._view.value is before
+    assert sent == []
     nf = PickPlaceTutor("NF", task=task, scene3d=Scene3D(task, mode="static", robot=False))
     nf.demonstrate(7)
     assert nf.scene3d.animation.label.startswith("Your demonstration 1")
     assert "Animated" in nf.scene3d.widget.children[0].value
+
+
+def _open_view(scene) -> list:
+    """Pretend a browser opened the notebook viewer; returns the list of messages sent."""
+    sent = []
+    view = scene.widget.children[1]
+    view.send = lambda content, buffers=None: sent.append((content, buffers))
+    scene._on_view_msg(view, {"type": "hello", "id": "v1"}, [])
+    assert sent[0][0] == {"type": "full", "to": "v1"}
+    sent.clear()
+    return sent
+
+
+def _frames(gz: bytes) -> list[dict]:
+    import umsgpack
+
+    raw, out, i = gzip.decompress(gz), [], 0
+    while i < len(raw):
+        (n,) = struct.unpack(">I", raw[i : i + 4])
+        out.append(umsgpack.unpackb(raw[i + 4 : i + 4 + n]))
+        i += 4 + n
+    return out
+
+
+def test_notebook_viewer_gets_the_scene_once_then_changes(task):
+    scene = Scene3D(task, mode="static")
+    view = scene.widget.children[1]
+    sent = []
+    view.send = lambda content, buffers=None: sent.append((content, buffers))
+    scene._on_view_msg(view, {"type": "hello", "id": "a"}, [])
+    (full, buffers) = sent.pop()
+    assert full == {"type": "full", "to": "a"} and len(buffers) == 2
+    assert len(buffers[0]) > 2e6  # the Panda's meshes, once per opened view
+    paths = {c["path"] for b in buffers for c in _frames(b)}
+    assert "/meshcat/robot/visuals/panda_hand_0" in paths and "/meshcat/lfd/bin" in paths
+    status = np.full(100, "unknown", dtype=object)
+    status[[3, 4]] = "pass"
+    scene.set_status(status)
+    scene.refresh()
+    (update, buffers) = sent.pop()
+    assert update == {"type": "update"} and len(buffers) == 1 and len(buffers[0]) < 5000
+    changed = {c["path"] for c in _frames(buffers[0]) if c["type"] == "set_object"}
+    assert changed == {"/meshcat/lfd/plants/3/ball", "/meshcat/lfd/plants/4/ball"}
+    scene.refresh()
+    assert sent == []  # nothing new, nothing sent
 
 
 def test_live_scene_streams_to_the_loopback_server(task):

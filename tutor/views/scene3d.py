@@ -23,18 +23,26 @@ Two ways to show it
     (:mod:`tutor.views.meshcat_server`). Updates stream in; it works only when the
     browser runs on the same machine as the kernel.
 ``mode="static"``
-    A self-contained HTML page (:meth:`Scene3D.static_html`; meshcat's viewer script
-    and the scene in one file, about 4 MB with the Panda's meshes compressed) shown in
-    an ``srcdoc`` iframe and written to a file by :meth:`Scene3D.save_html`. Works in
-    Voila, on Binder or JupyterHub, from ``file://`` and in CI.
+    No server. In the notebook, meshcat's viewer runs in an iframe inside a widget
+    and gets the scene over the widget's comm: all of it when a browser opens the
+    view (about 4 MB with the Panda's meshes compressed), then only what changed
+    after each step (a few kB, or ~0.3 MB with an animation), so the camera stays
+    where the trainee turned it. :meth:`Scene3D.static_html` gives the scene as one
+    self-contained page (meshcat's script inside; about 6 MB) and
+    :meth:`Scene3D.save_html` writes it to a file. Works in Voila, on Binder or
+    JupyterHub, from ``file://`` and in CI.
 
 ``mode="auto"`` (the default) is static under ``TUTOR_HEADLESS=1`` (no server is
-started) and behind JupyterHub or Binder, live otherwise.
+started), behind JupyterHub or Binder and in Voila opened from another machine; live
+otherwise.
 
 Every Meshcat command goes through a :class:`SceneRecorder`, which keeps the scene
-tree the way meshcat's server does (so the static page needs no server) and forwards
-the commands to the live server when there is one. Several :class:`Scene3D` in one
-kernel share that server: the live viewer shows the one updated last.
+tree the way meshcat's server does (so the static page needs no server), forwards
+the commands to the live server when there is one and tells its listeners (the
+notebook viewer). Several :class:`Scene3D` in one kernel share that server: the live
+viewer shows the one updated last. Drawing methods change the scene at once; the
+notebook viewer receives the changes at :meth:`Scene3D.refresh` (which
+:meth:`Scene3D.update` calls).
 
 Shapes
 ------
@@ -141,6 +149,8 @@ class SceneRecorder:
     def __init__(self, live=None):
         self.tree = _Node()
         self.live = live
+        #: callables ``f(kind, path, packed)`` told of every command (the notebook viewer)
+        self.listeners: list = []
         self.web_url = getattr(live, "web_url", None)
         self.live_error: str | None = None
 
@@ -155,6 +165,8 @@ class SceneRecorder:
         """Record one command (and forward it when live)."""
         self._record(kind, path, packed)
         self._forward(kind, path, packed)
+        for listener in self.listeners:
+            listener(kind, path, packed)
 
     def _record(self, kind, path, packed) -> None:
         parts = _split(path)
@@ -171,7 +183,7 @@ class SceneRecorder:
             key = umsgpack.unpackb(packed)["property"]
             self.tree.find(parts).properties[key] = item
         elif kind == "set_animation":
-            self.tree.find(parts).animation = item
+            self.tree.find(parts).animation = None if packed == _EMPTY_ANIMATION() else item
         elif kind == "delete":
             if parts:
                 parent = self.tree.find(parts[:-1])
@@ -255,7 +267,8 @@ class _RobotMeshes:
     """The robot's visual meshes as recorded Meshcat commands, built once per process."""
 
     commands: tuple  # (kind, path, packed) set_object commands
-    chunk: str  # base64 of their gzipped frames, for static pages
+    gz: bytes  # their gzipped frames, for the in-notebook viewer
+    chunk: str  # the same in base64, for static pages
     node_names: tuple  # Meshcat path (under ROOT) of each visual geometry
 
 
@@ -282,8 +295,8 @@ def _robot_meshes(name: str) -> _RobotMeshes:
         viz.loadViewerModel(rootNodeName="robot")
     objects = tuple(c for c in rec.commands() if c[0] == "set_object")
     names = tuple(f"robot/visuals/{g.name}" for g in robot.visual_model.geometryObjects)
-    chunk = base64.b64encode(_frame_commands(objects)).decode("ascii")
-    return _RobotMeshes(objects, chunk, names)
+    gz = _frame_commands(objects)
+    return _RobotMeshes(objects, gz, base64.b64encode(gz).decode("ascii"), names)
 
 
 def robot_meshes(name: str = "panda") -> _RobotMeshes:
@@ -395,6 +408,8 @@ class Scene3D:
         self._robot = robot_meshes(self.scene.robot) if robot else None
         self._arm = None
         self._widget = None
+        self._view = None
+        self._pending = None  # commands not yet sent to the notebook viewer
         self._shown_key = None
         self._claim_live(fresh=True)  # what follows streams to the live viewer as drawn
         self._draw_static_scene()
@@ -576,8 +591,7 @@ class Scene3D:
 
     def clear_animation(self) -> None:
         """Stop any animation and put the robot back at the start configuration."""
-        self.recorder.tree.animation = None
-        self.recorder._forward("set_animation", "", _EMPTY_ANIMATION())
+        self.recorder.send_packed("set_animation", "", _EMPTY_ANIMATION())
         self.vis["lfd/trails/animated"].delete()
         self.show_configuration(self.scene.start_configuration)
         p, _ = self._get_arm().fk(self.scene.start_configuration)
@@ -698,26 +712,30 @@ class Scene3D:
                 f"{self.recorder.live_error or 'no live viewer'}: showing a snapshot instead."
             )
 
-    def static_html(self, title: str = "lfd-tutor: pick and place in 3-D") -> str:
-        """The scene as one self-contained HTML page (meshcat's viewer script inside)."""
+    def _scene_chunks(self) -> list[bytes]:
+        """The whole scene as gzipped command frames: the robot's meshes (cached), the rest."""
         robot_ids = set()
         chunks = []
         if self._robot is not None:
             robot_ids = {id(c[2]) for c in self._robot.commands}
-            chunks.append(self._robot.chunk)
+            chunks.append(self._robot.gz)
         rest = [c for c in self.recorder.commands() if id(c[2]) not in robot_ids]
-        chunks.append(base64.b64encode(_frame_commands(rest)).decode("ascii"))
+        chunks.append(_frame_commands(rest))
+        return chunks
+
+    def static_html(self, title: str = "lfd-tutor: pick and place in 3-D") -> str:
+        """The scene as one self-contained HTML page (meshcat's viewer script inside)."""
+        chunks = self._scene_chunks()
+        if self._robot is not None:  # its base64 is cached too
+            chunks[0] = self._robot.chunk
         data = "".join(
-            f'<script type="application/octet-stream" class="scene-data">{c}</script>'
+            '<script type="application/octet-stream" class="scene-data">'
+            + (c if isinstance(c, str) else base64.b64encode(c).decode("ascii"))
+            + "</script>"
             for c in chunks
         )
-        return _PAGE.format(
-            title=html.escape(title),
-            viewer=_viewer_js(),
-            data=data,
-            legend=self.legend_html(),
-            caption=html.escape(self.animation.label if self.animation else ""),
-        )
+        caption = html.escape(self.animation.label if self.animation else "")
+        return _page(title, data, self.legend_html(), caption)
 
     def save_html(self, path) -> Path:
         """Write :meth:`static_html` to ``path``; returns the path."""
@@ -746,13 +764,33 @@ class Scene3D:
         ]
         return "<span style='font-size:12px'>" + "".join(items) + "</span>"
 
-    def _viewer_html(self) -> str:
-        style = f"width:100%;height:{self.height}px;border:1px solid #ccc"
+    def _make_view(self):
+        """The viewer widget: an iframe to the live server, or the in-notebook viewer."""
+        import ipywidgets as w
+
         if self.mode == "live":
             url = html.escape(self.recorder.web_url or "")
-            return f"<iframe src='{url}' style='{style}'></iframe>"
-        doc = html.escape(self.static_html(), quote=True)
-        return f'<iframe srcdoc="{doc}" style="{style}"></iframe>'
+            style = f"width:100%;height:{self.height}px;border:1px solid #ccc"
+            return w.HTML(f"<iframe src='{url}' style='{style}'></iframe>")
+        view = _viewer_widget_class()(height=self.height, page=_page("3-D view", "", "", ""))
+        view.on_msg(self._on_view_msg)
+        self.recorder.listeners.append(self._collect)
+        return view
+
+    def _collect(self, kind, path, packed) -> None:
+        if self._pending is not None:  # a browser shows the view: keep what changes
+            self._pending.append((kind, path, packed))
+
+    def _on_view_msg(self, _widget, content, _buffers) -> None:
+        if isinstance(content, dict) and content.get("type") == "hello":
+            # a browser (re)opened the view: send it the whole scene, then changes only
+            self._pending = []
+            self._view.send({"type": "full", "to": content.get("id")}, self._scene_chunks())
+
+    def _flush(self) -> None:
+        if self._pending:
+            self._view.send({"type": "update"}, [_frame_commands(self._pending)])
+            self._pending = []
 
     def _caption_html(self) -> str:
         parts = [self.legend_html()]
@@ -777,7 +815,7 @@ class Scene3D:
             import ipywidgets as w
 
             self._caption = w.HTML()
-            self._view = w.HTML()
+            self._view = self._make_view()
             self._widget = w.VBox([self._caption, self._view])
             self._widget.add_class("lfd-scene3d")
             self.refresh()
@@ -788,8 +826,11 @@ class Scene3D:
         if self._widget is None:
             return
         self._caption.value = self._caption_html()
-        if self.mode == "static" or not self._view.value:
-            self._view.value = self._viewer_html()
+        if self.mode == "static" and isinstance(self._view, _viewer_widget_class()):
+            self._flush()
+        elif self.mode == "static":  # the live viewer died: switch to the notebook viewer
+            self._view = self._make_view()
+            self._widget.children = (self._caption, self._view)
 
     def _ipython_display_(self):
         from IPython.display import display
@@ -809,6 +850,66 @@ def _viewer_js() -> str:
     return path.read_text(encoding="utf-8").replace("</script", "<\\/script")
 
 
+def _page(title: str, data: str, legend: str, caption: str) -> str:
+    overlay = (
+        f'<div id="lfd-legend">{legend}<div id="lfd-caption">{caption}</div></div>'
+        if legend or caption
+        else ""
+    )
+    return _PAGE.format(title=html.escape(title), viewer=_viewer_js(), data=data, overlay=overlay)
+
+
+@lru_cache(maxsize=1)
+def _viewer_widget_class():
+    import anywidget
+    import traitlets
+
+    class SceneView(anywidget.AnyWidget):
+        """meshcat's viewer in an iframe fed over the widget's comm: the whole scene
+        when a browser opens it, then only the changes (the camera stays put)."""
+
+        _esm = _WIDGET_JS
+        height = traitlets.Int(480).tag(sync=True)
+        page = traitlets.Unicode("").tag(sync=True)
+
+    return SceneView
+
+
+_WIDGET_JS = """
+function render({ model, el }) {
+  const id = Math.random().toString(36).slice(2);
+  const frame = document.createElement("iframe");
+  frame.style.width = "100%";
+  frame.style.height = model.get("height") + "px";
+  frame.style.border = "1px solid #ccc";
+  el.classList.add("lfd-scene3d-view");
+  el.dataset.updates = "0";
+  let ready = false;
+  let chain = Promise.resolve();
+  const apply = (buffers) => {
+    for (const b of buffers) {
+      const bytes = b instanceof ArrayBuffer
+        ? new Uint8Array(b)
+        : new Uint8Array(b.buffer, b.byteOffset, b.byteLength).slice();
+      chain = chain.then(() => frame.contentWindow.lfdApply(bytes));
+    }
+    chain = chain
+      .then(() => { el.dataset.updates = String(Number(el.dataset.updates) + 1); })
+      .catch((err) => { el.dataset.error = String(err); });
+  };
+  const onMsg = (msg, buffers) => {
+    if (msg.type === "full" && msg.to === id) { ready = true; apply(buffers); }
+    else if (msg.type === "update" && ready) { apply(buffers); }
+  };
+  model.on("msg:custom", onMsg);
+  frame.addEventListener("load", () => model.send({ type: "hello", id: id }));
+  frame.srcdoc = model.get("page");
+  el.appendChild(frame);
+  return () => model.off("msg:custom", onMsg);
+}
+export default { render };
+"""
+
 _PAGE = """<!DOCTYPE html>
 <html>
 <head><meta charset="utf-8"><title>{title}</title>
@@ -821,29 +922,37 @@ body {{ margin: 0; font-family: sans-serif; }}
 </style></head>
 <body>
 <div id="meshcat-pane"></div>
-<div id="lfd-legend">{legend}<div id="lfd-caption">{caption}</div></div>
+{overlay}
 {data}
 <script>{viewer}</script>
 <script>
 var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
+// Apply gzipped, length-prefixed msgpack commands, in order.
+async function lfdApply(gz) {{
+  const stream = new Blob([gz]).stream().pipeThrough(new DecompressionStream("gzip"));
+  const buf = new Uint8Array(await new Response(stream).arrayBuffer());
+  const view = new DataView(buf.buffer);
+  let i = 0;
+  while (i < buf.length) {{
+    const n = view.getUint32(i);
+    viewer.handle_command_bytearray(buf.slice(i + 4, i + 4 + n));
+    i += 4 + n;
+  }}
+}}
+function lfdCaption(text) {{
+  const el = document.getElementById("lfd-caption");
+  if (el) el.textContent = text;
+}}
+window.lfdApply = lfdApply;
+window.lfdCaption = lfdCaption;
 (async function () {{
   for (const el of document.querySelectorAll("script.scene-data")) {{
-    const bytes = Uint8Array.from(atob(el.textContent), c => c.charCodeAt(0));
-    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("gzip"));
-    const buf = new Uint8Array(await new Response(stream).arrayBuffer());
-    const view = new DataView(buf.buffer);
-    let i = 0;
-    while (i < buf.length) {{
-      const n = view.getUint32(i);
-      viewer.handle_command_bytearray(buf.slice(i + 4, i + 4 + n));
-      i += 4 + n;
-    }}
+    await lfdApply(Uint8Array.from(atob(el.textContent), c => c.charCodeAt(0)));
   }}
   document.body.dataset.ready = "1";
 }})().catch(function (err) {{
   document.body.dataset.ready = "error";
-  document.getElementById("lfd-caption").textContent =
-    "This browser could not unpack the 3-D scene: " + err;
+  lfdCaption("This browser could not unpack the 3-D scene: " + err);
 }});
 </script>
 </body>
