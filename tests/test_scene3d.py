@@ -21,7 +21,13 @@ import pytest
 from tutor.errors import InvalidParameterError
 from tutor.tasks.pickplace import PickPlaceTask
 from tutor.views import meshcat_server
-from tutor.views.meshcat_server import LOOPBACK, get_server, start_server, visualizer
+from tutor.views.meshcat_server import (
+    LOOPBACK,
+    MeshcatServerError,
+    get_server,
+    start_server,
+    visualizer,
+)
 from tutor.views.pickplace_app import PickPlaceTutor, tray_status
 from tutor.views.scene3d import STATUS_COLOURS, Scene3D, SceneRecorder, choose_mode
 
@@ -189,6 +195,13 @@ def test_server_dies_with_its_parent(how):
         if child.poll() is None:
             child.kill()
             child.wait()
+
+
+def test_server_that_cannot_start_is_a_named_error():
+    busy = get_server().port
+    with pytest.raises(MeshcatServerError, match="exited with code") as info:
+        start_server(port=busy)
+    assert "in use" in str(info.value)  # the server's own message is passed on
 
 
 def test_dead_live_viewer_falls_back():

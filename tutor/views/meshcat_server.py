@@ -28,7 +28,7 @@ import atexit
 import contextlib
 import io
 import os
-import selectors
+import queue
 import subprocess
 import sys
 import tempfile
@@ -108,6 +108,18 @@ def _bridge_class():
 
 
 def _parent_alive(pid: int) -> bool:
+    if sys.platform == "win32":  # pragma: no cover - not tested here
+        # os.kill(pid, 0) would terminate the process on Windows: ask for its exit code
+        import ctypes
+
+        kernel32 = ctypes.windll.kernel32
+        handle = kernel32.OpenProcess(0x1000, False, pid)  # PROCESS_QUERY_LIMITED_INFORMATION
+        if not handle:
+            return False
+        code = ctypes.c_ulong()
+        kernel32.GetExitCodeProcess(handle, ctypes.byref(code))
+        kernel32.CloseHandle(handle)
+        return code.value == 259  # STILL_ACTIVE
     if os.getppid() != pid:  # re-parented: the parent has died
         return False
     try:
@@ -209,7 +221,7 @@ class MeshcatServer:
             self._log = None
 
 
-def start_server(timeout: float = 30.0) -> MeshcatServer:
+def start_server(timeout: float = 30.0, port: int | None = None) -> MeshcatServer:
     """Start a new loopback Meshcat server process, child of this one.
 
     Most code wants :func:`get_server` (one server per process) instead.
@@ -218,6 +230,8 @@ def start_server(timeout: float = 30.0) -> MeshcatServer:
     ----------
     timeout : float
         Seconds to wait for the server to print its URLs.
+    port : int, optional
+        Web server port (default: the first free one from 7000).
 
     Returns
     -------
@@ -231,37 +245,42 @@ def start_server(timeout: float = 30.0) -> MeshcatServer:
     root = str(Path(__file__).resolve().parents[2])
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
-    cmd = [sys.executable, "-u", "-m", "tutor.views.meshcat_server", "--parent-pid"]
+    cmd = [sys.executable, "-u", "-m", "tutor.views.meshcat_server"]
+    if port is not None:
+        cmd += ["--port", str(int(port))]
     log = tempfile.TemporaryFile()  # stderr: read on failure, never fills a pipe
     proc = subprocess.Popen(
-        [*cmd, str(os.getpid())],
+        [*cmd, "--parent-pid", str(os.getpid())],
         stdin=subprocess.DEVNULL,
         stdout=subprocess.PIPE,
         stderr=log,
         env=env,
         start_new_session=True,  # a SIGINT to the kernel's process group spares it
     )
+    lines: queue.Queue = queue.Queue()
+
+    def read_lines():  # in a thread: a pipe cannot be polled portably (Windows)
+        with proc.stdout:
+            for raw in proc.stdout:
+                lines.put(raw)
+        lines.put(None)  # end of file: the server exited or moved stdout to stderr
+
+    threading.Thread(target=read_lines, daemon=True, name="meshcat-server-urls").start()
     urls: dict[str, str] = {}
-    buffer = b""
     deadline = time.monotonic() + timeout
-    with selectors.DefaultSelector() as sel:
-        sel.register(proc.stdout, selectors.EVENT_READ)
-        while len(urls) < 2:
-            left = deadline - time.monotonic()
-            if left <= 0 or proc.poll() is not None:
-                break
-            if not sel.select(min(left, 0.2)):
-                continue
-            chunk = os.read(proc.stdout.fileno(), 4096)
-            if not chunk:
-                break
-            buffer += chunk
-            *lines, buffer = buffer.split(b"\n")
-            for line in lines:
-                key, _, value = line.decode("utf-8", "replace").strip().partition("=")
-                if key in ("zmq_url", "web_url"):
-                    urls[key] = value
-    proc.stdout.close()
+    while len(urls) < 2:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            break
+        try:
+            raw = lines.get(timeout=min(left, 0.5))
+        except queue.Empty:
+            continue
+        if raw is None:
+            break
+        key, _, value = raw.decode("utf-8", "replace").strip().partition("=")
+        if key in ("zmq_url", "web_url"):
+            urls[key] = value
     if len(urls) < 2:
         if proc.poll() is None:
             proc.kill()
