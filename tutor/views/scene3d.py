@@ -370,7 +370,8 @@ class Scene3D:
     robot : bool
         Draw the robot (tests draw it once without).
     live_timeout : float
-        Seconds to wait for the live server's reply before falling back to a snapshot.
+        Seconds to wait for the live server's reply before showing the scene in the
+        notebook instead.
     """
 
     def __init__(
@@ -380,11 +381,19 @@ class Scene3D:
             from ..tasks.pickplace import PickPlaceTask
 
             task = PickPlaceTask()
+        if not (hasattr(task, "scene") and hasattr(task, "conditions")):
+            raise InvalidParameterError(
+                f"task must be a PickPlaceTask (with a scene and conditions), got {task!r}"
+            )
         self.task = task
         self.scene = task.scene
         if not (isinstance(height, int | np.integer) and 150 <= height <= 2000):
             raise InvalidParameterError(f"height must be 150 to 2000 pixels, got {height!r}")
-        if not (np.isfinite(seconds) and 1.0 <= seconds <= 120.0):
+        try:
+            ok = 1.0 <= float(seconds) <= 120.0
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
             raise InvalidParameterError(f"seconds must be between 1 and 120, got {seconds!r}")
         self.height = int(height)
         self.seconds = float(seconds)
@@ -399,7 +408,8 @@ class Scene3D:
                 live = visualizer(timeout=live_timeout).window
             except (MeshcatServerError, OSError) as exc:
                 self.mode = "static"
-                self.message = f"No live 3-D viewer ({exc}): showing a snapshot instead."
+                last = (str(exc).strip().splitlines() or [type(exc).__name__])[-1]
+                self.message = f"No live 3-D viewer ({last}): showing the scene in the notebook."
         self.recorder = SceneRecorder(live)
         import meshcat
 
@@ -460,7 +470,8 @@ class Scene3D:
         hand.set_transform(tf.translation_matrix(p))
 
     def scene_centre(self) -> np.ndarray:
-        """The point the camera looks at (3,): between the robot's base, the tray and the bin."""
+        """The point the camera looks at (3,): between the tray and the bin, a little
+        towards the robot, 20 cm above the table (chosen by eye for the bundled scene)."""
         sc = self.scene
         mid = (sc.tray_center[:2] + sc.bin_center[:2]) / 2
         return np.array([mid[0] / 2 + 0.1, mid[1], 0.2])
@@ -709,7 +720,8 @@ class Scene3D:
         if self.mode == "live" and self.recorder.live is None:
             self.mode = "static"
             self.message = (
-                f"{self.recorder.live_error or 'no live viewer'}: showing a snapshot instead."
+                f"{self.recorder.live_error or 'no live viewer'}: showing the scene in the "
+                "notebook instead."
             )
 
     def _scene_chunks(self) -> list[bytes]:
@@ -822,7 +834,7 @@ class Scene3D:
         return self._widget
 
     def refresh(self) -> None:
-        """Redraw the widget (a live viewer updates by itself; a snapshot is re-made)."""
+        """Update the widget: the caption, and the changes for the notebook viewer."""
         if self._widget is None:
             return
         self._caption.value = self._caption_html()
