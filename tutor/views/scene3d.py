@@ -914,7 +914,8 @@ function render({ model, el }) {
     else if (msg.type === "update" && ready) { apply(buffers); }
   };
   model.on("msg:custom", onMsg);
-  frame.addEventListener("load", () => model.send({ type: "hello", id: id }));
+  // (re)loaded, e.g. when the page moves the output: ask for the whole scene again
+  frame.addEventListener("load", () => { ready = false; model.send({ type: "hello", id: id }); });
   frame.srcdoc = model.get("page");
   el.appendChild(frame);
   return () => model.off("msg:custom", onMsg);
