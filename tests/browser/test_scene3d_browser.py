@@ -1,0 +1,113 @@
+"""The 3-D view inside a notebook page (Voila, headless chromium), without a Meshcat server.
+
+A tiny notebook shows a pick-and-place tutor with ``Scene3D(mode="static")``: the
+viewer in the widget gets the whole scene once, then only the changes. The test turns
+the camera with the mouse, demonstrates, and checks that the update arrived, that the
+robot's attempt is animated and that the camera stayed where it was turned.
+Screenshots go to test-artifacts/.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+
+import pytest
+
+from tests.browser.conftest import ARTIFACTS, free_port, stop, wait_http
+
+pytestmark = pytest.mark.browser
+
+NOTEBOOK = {
+    "cells": [
+        {
+            "cell_type": "code",
+            "execution_count": None,
+            "id": "scene3d",
+            "metadata": {},
+            "outputs": [],
+            "source": (
+                "from tutor.views.pickplace_app import PickPlaceTutor\n"
+                "from tutor.views.scene3d import Scene3D\n"
+                "scene = Scene3D(mode='static', height=420)\n"
+                "tutor = PickPlaceTutor('RF', scene3d=scene, seed=1, task=scene.task)\n"
+                "tutor"
+            ),
+        }
+    ],
+    "metadata": {
+        "kernelspec": {"display_name": "Python 3", "language": "python", "name": "python3"}
+    },
+    "nbformat": 4,
+    "nbformat_minor": 5,
+}
+VIEW = ".lfd-scene3d-view"
+
+
+@pytest.fixture(scope="module")
+def voila_scene(workdir):
+    root, env = workdir
+    nb = root / "scene3d_test.ipynb"
+    nb.write_text(json.dumps(NOTEBOOK))
+    port = free_port()
+    log = open(root / "voila-scene3d.log", "w")  # noqa: SIM115
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "voila", str(nb), "--no-browser", f"--port={port}"]
+        + ["--Voila.ip=127.0.0.1"],
+        env={**env, "TUTOR_SESSION_DIR": str(root / "scene3d-sessions")},
+        stdout=log,
+        stderr=subprocess.STDOUT,
+        cwd=root,
+    )
+    try:
+        wait_http(f"http://127.0.0.1:{port}/", proc, timeout=120)
+        yield f"http://127.0.0.1:{port}/"
+    finally:
+        stop(proc)
+        log.close()
+
+
+def updates(page) -> int:
+    return int(page.locator(VIEW).first.get_attribute("data-updates") or 0)
+
+
+def test_notebook_viewer_updates_without_resetting_the_camera(page, voila_scene, artifacts):
+    page.goto(voila_scene)
+    view = page.locator(VIEW).first
+    try:
+        view.wait_for(timeout=240_000)
+        page.wait_for_function(
+            f"document.querySelector('{VIEW}').dataset.updates === '1'", timeout=120_000
+        )
+    except Exception:
+        page.screenshot(path=str(artifacts / "scene3d_voila_timeout.png"))
+        raise
+    frame = view.locator("iframe").content_frame
+    body = frame.locator("body")
+    n_meshes = body.evaluate(
+        "() => { let n = 0; viewer.scene.traverse(o => { if (o.isMesh) n++; }); return n; }"
+    )
+    assert n_meshes > 200  # table, tray, bin, 100 stems and balls, the Panda's links
+    box = view.bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    page.mouse.move(cx + 150, cy, steps=10)
+    page.mouse.up()
+    turned = body.evaluate("() => viewer.camera.position.toArray()")
+    page.screenshot(path=str(ARTIFACTS / "scene3d_voila_0.png"))
+
+    page.locator(".lfd-pickplace-tutor").first.get_by_role("button", name="Demonstrate").click()
+    page.wait_for_function(
+        f"document.querySelector('{VIEW}').dataset.updates === '2'", timeout=120_000
+    )
+    assert view.get_attribute("data-error") is None
+    assert body.evaluate("() => viewer.camera.position.toArray()") == turned
+    duration, playing = body.evaluate("() => [viewer.animator.duration, viewer.animator.playing]")
+    assert 8 <= duration <= 12 and playing  # the replay of the demonstrated plant
+    caption = page.locator(".lfd-scene3d").first.inner_text()
+    assert "attempt at plant (5, 5)" in caption
+    time.sleep(3)
+    page.screenshot(path=str(ARTIFACTS / "scene3d_voila_1.png"))
