@@ -218,6 +218,9 @@ def test_dead_live_viewer_falls_back():
     scene["box2"].set_object(mg.Box([0.1, 0.1, 0.1]))
     assert rec.live is None and "stopped answering" in rec.live_error
     assert [c[1] for c in rec.commands()] == ["/meshcat/box", "/meshcat/box2"]
+    # meshcat's own static export works from the recording, without a server
+    page = scene.static_html()
+    assert [c["path"] for c in _scene_commands(page)] == ["/meshcat/box", "/meshcat/box2"]
 
 
 # --------------------------------------------------------------------------- the scene

@@ -225,6 +225,12 @@ class SceneRecorder:
                 animations.append(node.animation)
         return out + animations
 
+    def get_scene(self) -> str:
+        """The recorded scene as a self-contained page (``meshcat.Visualizer.static_html``)."""
+        data = base64.b64encode(_frame_commands(self.commands())).decode("ascii")
+        chunk = f'<script type="application/octet-stream" class="scene-data">{data}</script>'
+        return _page("MeshCat", chunk, "", "")
+
     def replay_to_live(self, clear: str | None = None) -> None:
         """Send the whole recorded scene to the live viewer (after ``delete clear``)."""
         if self.live is None:
