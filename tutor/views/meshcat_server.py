@@ -343,4 +343,7 @@ def visualizer(server: MeshcatServer | None = None, timeout: float = 10.0):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    status = main()
+    sys.stderr.flush()
+    # Leave at once: a zmq context with a client still connected can block a normal exit.
+    os._exit(status)
