@@ -815,8 +815,8 @@ class Scene3D:
         if self.animation is not None:
             parts.append(f"<div><b>Animated:</b> {html.escape(self.animation.label)}</div>")
         how = (
-            "Drag to turn, scroll to zoom, right-drag to move. Replay: <i>Animations ▸ "
-            "default ▸ play</i> in the controls at the top right."
+            "Drag to turn, scroll to zoom, right-drag to move. To replay: <i>Open Controls "
+            "▸ Animations ▸ default ▸ play</i> (top right of the view)."
         )
         if self.mode == "live" and self.recorder.web_url:
             url = html.escape(self.recorder.web_url)
