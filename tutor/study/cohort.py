@@ -12,6 +12,9 @@ traits, stream k >= 1 the k-th run), so a teacher's numbers do not depend on whi
 worker process ran them or in what order; results are sorted by teacher. Workers use
 one BLAS/OpenMP thread each.
 
+Experiment 2's teachers keep their memory between their three runs (the plants they
+saw fail); Experiment 1's start every condition afresh.
+
 Scores: Experiment 1 uses the paper's rule (demos to first reach 90 % coverage, or all
 demos; eta there). Experiment 2 uses eta = eps / |b| of the final demonstration set of
 each run (the paper gives no 90 % rule for it). Failures are counted on each run's
@@ -277,8 +280,8 @@ def run_experiment(
     n : int, optional
         Number of teachers (default the paper's: 30 and 36).
     workers : int, optional
-        Processes to use (default: the machine's cores, at most 2 teachers' worth of
-        work each); 1 runs in this process.
+        Processes to use (default: the machine's cores, at most ``n``); 1 runs in this
+        process. One task per teacher, so the cores share the work as it comes.
     progress : bool
         Show a tqdm progress bar (one step per teacher).
     population : Population
