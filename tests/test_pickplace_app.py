@@ -86,3 +86,46 @@ def test_compare_runs_reports_the_paper(task):
         runs.append(t)
     text = compare_runs(runs)
     assert "Run 3 (BF)" in text and "23.5%" in text and "27.0%" in text
+
+
+def test_load_recorded_demos_keeps_the_chosen_plant(task, tmp_path):
+    from tutor.demofiles import BUNDLED_DIR
+
+    rf = PickPlaceTutor("RF", session_file=tmp_path / "rf.json", task=task)
+    rf.load(BUNDLED_DIR / "pickplace_wrong_plant.json")
+    s = rf.run.session
+    assert s.n_demos == 3 and "Added 3" in rf.message
+    # demo 2 went to the plant next to the chosen corner: the file says which was meant
+    assert [r.demo_passed for r in s.history] == [True, False, True]
+    assert "instead of the chosen plant (10, 10)" in s.history[1].demo_reason
+    assert rf.run.elapsed > 3 * 9  # each recording costs its own duration (~10 s) and 25 s
+    assert (tmp_path / "rf.json").exists()  # autosaved
+
+
+def test_load_bad_files_changes_nothing(task, tmp_path):
+    from tutor.demofiles import BUNDLED_DIR, save_demos
+
+    bf = PickPlaceTutor("BF", task=task, seed=0)
+    bf.demonstrate(44)
+    before = (bf.run.session.n_demos, bf.run.elapsed)
+    maze = BUNDLED_DIR / "maze_good.json"
+    bf.load(maze)
+    assert "Nothing was loaded" in bf.message and "t, x, y, z, g" in bf.message
+    good = task.demonstrate(0, np.random.default_rng(0))
+    bad = good.copy()
+    bad[:, 4] *= 2  # the hand column must be 0 .. 1
+    save_demos(tmp_path / "half.csv", [good, bad], columns="txyzg")
+    bf.load(tmp_path / "half.csv")  # demo 1 is fine, demo 2 is not: all or nothing
+    assert "demo 2 of half.csv" in bf.message and "between 0 (open) and 1" in bf.message
+    (tmp_path / "junk.json").write_text("{not json")
+    bf.load(tmp_path / "junk.json")
+    assert "Nothing was loaded" in bf.message
+    assert (bf.run.session.n_demos, bf.run.elapsed) == before
+
+
+def test_undo_keeps_the_time_spent(task):
+    bf = PickPlaceTutor("BF", task=task, seed=0)
+    bf.demonstrate(44)
+    spent = bf.run.elapsed
+    bf.undo()
+    assert bf.run.session.n_demos == 0 and bf.run.elapsed == pytest.approx(spent)

@@ -13,12 +13,16 @@ grey, not shown to the trainee (yet).
 
 from __future__ import annotations
 
+import copy
 import html
+import tempfile
+from pathlib import Path
 
 import ipywidgets as w
 import numpy as np
 
-from ..errors import TutorError
+from ..demofiles import load_demos
+from ..errors import InvalidFileError, TutorError
 from ..fileio import read_json
 from ..framework import TeachingSession
 from ..runtime import headless
@@ -102,11 +106,18 @@ class PickPlaceTutor:
         self.buttons["Test plant"].on_click(lambda _: self.test())
         self.buttons["Undo"].on_click(lambda _: self.undo())
         self.buttons["Finish run"].on_click(lambda _: self.finish())
+        self.upload = w.FileUpload(
+            accept=".json,.csv",
+            multiple=False,
+            description="Load demos",
+            layout=w.Layout(width="120px"),
+        )
+        self.upload.observe(self._on_upload, names="value")
         self.clock = w.HTML()
         self.panel = w.HTML(layout=w.Layout(width="420px"))
         controls = w.VBox(
             [
-                w.HBox([self.buttons["Demonstrate"], self.mistake]),
+                w.HBox([self.buttons["Demonstrate"], self.mistake, self.upload]),
                 w.HBox(
                     [self.buttons["Test plant"], self.buttons["Undo"], self.buttons["Finish run"]]
                 ),
@@ -128,8 +139,6 @@ class PickPlaceTutor:
     def _resume(self, condition) -> PickPlaceRun:
         path = self.session_file
         if path is not None:
-            from pathlib import Path
-
             path = Path(path)
             if path.exists():
                 try:
@@ -184,13 +193,60 @@ class PickPlaceTutor:
         self.refresh()
 
     def undo(self) -> None:
-        s = self.run.session
-        if s.n_demos and not self.run.finished:
-            s.undo()
-            s.meta["demo_seconds"] = s.meta["demo_seconds"][: s.n_demos]
-            s.meta["tests"] = [t for t in s.meta["tests"] if t["after_demo"] <= s.n_demos]
+        """Take back the latest demo (the time it took stays spent, as on a real robot)."""
+        if self.run.session.n_demos and not self.run.finished:
+            self.run.undo()
+            self.message = "Took back the latest demonstration (its time stays used)."
             self._autosave()
         self.refresh()
+
+    def load(self, path) -> None:
+        """Add the demonstrations of a recorded file (JSON or CSV: t, x, y, z, g).
+
+        Each demo counts for the plant the file says it was meant for (``conditions``),
+        or else the plant nearest to where the hand closes. All or nothing: if one demo
+        is rejected, or the 15 minutes run out, the run is left as it was.
+        """
+        path = Path(path)
+        run = self.run
+        before = copy.deepcopy(run.session.to_dict())
+        try:
+            demos = load_demos(path)
+            if demos.columns and len(demos.columns) != 5:
+                raise InvalidFileError(
+                    f"{path.name} has columns {', '.join(demos.columns)}; a pick-and-place "
+                    "demonstration has 5: t, x, y, z, g (hand 0 open, 1 closed)"
+                )
+            for i, (raw, meant) in enumerate(zip(demos, demos.conditions, strict=True), 1):
+                try:
+                    plant = self.task.nearest_condition(
+                        self.task.condition_of(self.task.preprocess(raw))
+                        if meant is None
+                        else meant
+                    )
+                    run.demonstrate(plant, raw=raw)
+                except TutorError as exc:
+                    raise InvalidFileError(f"demo {i} of {path.name}: {exc}") from exc
+            self.message = f"Added {len(demos)} demonstration(s) from {path.name}."
+        except (InvalidFileError, OSError, UnicodeDecodeError) as exc:
+            session = TeachingSession.from_dict(before, self.task)
+            self.run = PickPlaceRun(run.condition, self.task, session)
+            self.message = f"Nothing was loaded: {exc}"
+            self.refresh()
+            return
+        self._autosave()
+        self.refresh()
+
+    def _on_upload(self, change) -> None:
+        files = change["new"]
+        if not files:
+            return
+        item = files[0]
+        suffix = Path(item["name"]).suffix or ".json"
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / f"{Path(item['name']).stem or 'upload'}{suffix}"
+            path.write_bytes(bytes(item["content"]))
+            self.load(path)
 
     def finish(self) -> None:
         self.run.finish()
