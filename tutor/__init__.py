@@ -13,7 +13,9 @@ layer only imports from the layers to its left:
 - ``tasks``: the maze and pick-and-place tasks the learner is taught.
 - ``robot``: the simulated arm (Pinocchio + example-robot-data).
 - ``views``: plots (matplotlib) and 3-D rendering (Meshcat).
-- ``teachers``: simulated teachers and cohorts.
+- ``teachers``: simulated teachers (the paper's teacher model: Q, omega, Omega).
+- ``study``: the paper's two experiments rerun with simulated cohorts, their
+  statistics and figures (``python -m tutor reproduce --experiment 1|2``).
 
 This module imports nothing so that ``import tutor`` stays cheap.
 """

@@ -104,7 +104,9 @@ def _jsonable(value):
     if isinstance(value, pd.DataFrame):
         return json.loads(value.to_json(orient="index"))
     if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {
+            "-".join(k) if isinstance(k, tuple) else str(k): _jsonable(v) for k, v in value.items()
+        }
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, float) and not np.isfinite(value):
@@ -133,15 +135,7 @@ def save_result(result: CohortResult, analysis: dict, out, figures: bool = True)
         "seed": result.seed,
         "n_teachers": int(result.runs.teacher.nunique()),
         "settings": result.settings.__dict__,
-        "paper": _jsonable(
-            {
-                str(k): v
-                for k, v in (
-                    paper.EXPERIMENT_1 if result.experiment == 1 else paper.EXPERIMENT_2
-                ).items()
-                if k != "pairwise_p"
-            }
-        ),
+        "paper": _jsonable(paper.EXPERIMENT_1 if result.experiment == 1 else paper.EXPERIMENT_2),
         **_jsonable({k: v for k, v in analysis.items()}),
     }
     paths["summary"].write_text(json.dumps(summary, indent=2, default=str))
