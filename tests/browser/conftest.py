@@ -92,6 +92,8 @@ def jupyterlab(workdir):
             f"--ServerApp.token={token}",
             "--allow-root",
             f"--ServerApp.root_dir={root / 'notebooks'}",
+            # a workspace of its own: tabs left open by another server are not restored
+            f"--LabApp.workspaces_dir={root / 'workspaces'}",
         ],
         env=env,
         stdout=log,
