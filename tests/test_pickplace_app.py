@@ -129,3 +129,22 @@ def test_undo_keeps_the_time_spent(task):
     spent = bf.run.elapsed
     bf.undo()
     assert bf.run.session.n_demos == 0 and bf.run.elapsed == pytest.approx(spent)
+
+
+def test_upload_widget_adds_recorded_demos(task):
+    import datetime
+
+    from tutor.demofiles import BUNDLED_DIR
+
+    data = (BUNDLED_DIR / "pickplace_corners.json").read_bytes()
+    app = PickPlaceTutor("NF", task=task)
+    app.upload.value = (
+        {
+            "name": "my corners.json",
+            "type": "application/json",
+            "size": len(data),
+            "content": memoryview(data),
+            "last_modified": datetime.datetime.now(datetime.UTC),
+        },
+    )
+    assert app.run.session.n_demos == 5 and "my corners.json" in app.message

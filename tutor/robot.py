@@ -70,6 +70,7 @@ __all__ = [
     "FeasibilityMap",
     "FullCheck",
     "MapCheck",
+    "check_paths",
     "default_map",
     "open_box",
     "scene_obstacles",
@@ -994,6 +995,43 @@ def default_map(obstacles, robot: str = "panda", tool_frame: str = "panda_hand_t
     return fmap
 
 
+def check_paths(points, gripper=None) -> tuple[np.ndarray, np.ndarray]:
+    """Validate tool paths and their hand commands.
+
+    Parameters
+    ----------
+    points : array_like (..., T, 3)
+        Tool positions (m).
+    gripper : array_like broadcastable to (..., T), optional
+        Hand command per sample, 0 open .. 1 closed (default open).
+
+    Returns
+    -------
+    points : ndarray (..., T, 3) of float
+    gripper : ndarray (..., T) of float
+
+    Raises
+    ------
+    InvalidParameterError
+        Wrong shapes or values that are not numbers.
+    """
+    try:
+        P = np.asarray(points, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError("points must be numbers of shape (..., T, 3)") from exc
+    if P.ndim < 2 or P.shape[-1] != 3:
+        raise InvalidParameterError(f"points must have shape (..., T, 3), got {P.shape}")
+    if gripper is None:
+        return P, np.zeros(P.shape[:-1])
+    try:
+        G = np.broadcast_to(np.asarray(gripper, dtype=float), P.shape[:-1])
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(
+            f"gripper must have shape {P.shape[:-1]} like the points, got {np.shape(gripper)}"
+        ) from exc
+    return P, G
+
+
 class FullCheck:
     """Criterion (i) at full fidelity: :meth:`Arm.follow` along every path.
 
@@ -1028,16 +1066,10 @@ class FullCheck:
         -------
         ndarray (..., T) of bool
         """
-        P = np.asarray(points, dtype=float)
-        if P.ndim < 2 or P.shape[-1] != 3:
-            raise InvalidParameterError(f"points must have shape (..., T, 3), got {P.shape}")
+        P, G = check_paths(points, gripper)
         shape = P.shape[:-1]
         paths = P.reshape(-1, shape[-1], 3)
-        G = (
-            np.zeros(paths.shape[:2])
-            if gripper is None
-            else np.broadcast_to(np.asarray(gripper, dtype=float), shape).reshape(paths.shape[:2])
-        )
+        G = G.reshape(paths.shape[:2])
         out = np.empty(paths.shape[:2], dtype=bool)
         for i, (path, g) in enumerate(zip(paths, G, strict=True)):
             tr = self.arm.follow(path, g)
@@ -1090,22 +1122,15 @@ class MapCheck:
         -------
         ndarray (..., T) of bool
         """
-        P = np.asarray(points, dtype=float)
-        if P.ndim < 2 or P.shape[-1] != 3:
-            raise InvalidParameterError(f"points must have shape (..., T, 3), got {P.shape}")
-        value = self.map.value(P, gripper)
+        P, G = check_paths(points, gripper)
+        value = self.map.value(P, G)
         out = value > 0
         off_grid = np.isneginf(value)
         near = np.linalg.norm(P - self.shoulder, axis=-1) <= self.reach
         redo = (off_grid & near).any(axis=-1)  # (...)
         if redo.any():
-            G = (
-                None
-                if gripper is None
-                else np.broadcast_to(np.asarray(gripper, float), P.shape[:-1])
-            )
             idx = np.nonzero(redo)
-            out[idx] = self.full.contains(P[idx], None if G is None else G[idx])
+            out[idx] = self.full.contains(P[idx], G[idx])
         return out
 
     def path_ok(self, paths, gripper=None) -> np.ndarray:

@@ -15,7 +15,6 @@ so a crashed or restarted kernel resumes where the trainee was.
 from __future__ import annotations
 
 import html
-import tempfile
 from pathlib import Path
 
 import ipywidgets as w
@@ -29,6 +28,7 @@ from ..tasks.maze import MazeTask
 from ..tasks.maze_rules import advise, followed
 from .sketchpad import Sketchpad, layout_spec
 from .text import session_report, summary
+from .uploads import on_upload
 
 __all__ = ["MazeTutor", "CONDITIONS", "PAPER_MEDIAN_ETA", "compare_runs", "plot_runs"]
 
@@ -70,7 +70,7 @@ class MazeTutor:
         self.buttons["Reset"].on_click(lambda _: self.reset())
         self.buttons["Save"].on_click(lambda _: self.save())
         self.buttons["Finish"].on_click(lambda _: self.finish())
-        self.upload.observe(self._on_upload, names="value")
+        self.upload.observe(on_upload(self.load), names="value")
         self.pad.observe(self._on_stroke, names="stroke_count")
         self.widget = w.HBox(
             [
@@ -221,17 +221,6 @@ class MazeTutor:
             return
         self._autosave()
         self.refresh()
-
-    def _on_upload(self, change) -> None:
-        files = change["new"]
-        if not files:
-            return
-        item = files[0]
-        suffix = Path(item["name"]).suffix or ".json"
-        with tempfile.TemporaryDirectory() as tmp:
-            path = Path(tmp) / f"upload{suffix}"
-            path.write_bytes(bytes(item["content"]))
-            self.load(path)
 
     def _autosave(self) -> None:
         if self.session_file is not None and self._autosave_ok:

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import copy
 import html
-import tempfile
 from pathlib import Path
 
 import ipywidgets as w
@@ -30,6 +29,7 @@ from ..tasks.pickplace import PickPlaceTask
 from ..tasks.pickplace_protocol import PickPlaceRun
 from .style import DEMO, FAIL, PASS
 from .text import session_report, summary
+from .uploads import on_upload
 
 __all__ = ["PickPlaceTutor", "tray_status", "compare_runs", "PAPER_MEAN_ETA", "PAPER_THIRD_RUN_ETA"]
 
@@ -112,7 +112,7 @@ class PickPlaceTutor:
             description="Load demos",
             layout=w.Layout(width="120px"),
         )
-        self.upload.observe(self._on_upload, names="value")
+        self.upload.observe(on_upload(self.load), names="value")
         self.clock = w.HTML()
         self.panel = w.HTML(layout=w.Layout(width="420px"))
         controls = w.VBox(
@@ -236,17 +236,6 @@ class PickPlaceTutor:
             return
         self._autosave()
         self.refresh()
-
-    def _on_upload(self, change) -> None:
-        files = change["new"]
-        if not files:
-            return
-        item = files[0]
-        suffix = Path(item["name"]).suffix or ".json"
-        with tempfile.TemporaryDirectory() as tmp:
-            path = Path(tmp) / f"{Path(item['name']).stem or 'upload'}{suffix}"
-            path.write_bytes(bytes(item["content"]))
-            self.load(path)
 
     def finish(self) -> None:
         self.run.finish()
