@@ -25,7 +25,8 @@ BASE = TeacherTraits(
     enough_maze=4,
     enough_pickplace=5,
     plan_focus=(0.5, 0.5),
-    plan_spread=0.2,
+    plan_spread_maze=0.2,
+    plan_spread_pickplace=0.2,
     aim_sd=0.02,
     motor_noise=0.003,
     slip_rate=0.0,
@@ -70,6 +71,11 @@ def test_population_draws_are_seeded_and_in_range():
     # one personal optimism factor: the two priors move together
     z = np.array([(t.enough_maze, t.enough_pickplace) for t in many], float)
     assert np.corrcoef(z.T)[0, 1] > 0.8
+    # one personal scatter factor: the tray's spread is the maze's times the medians' ratio
+    ratio = pop.spread_median_pickplace / pop.spread_median_maze
+    for t in many:
+        assert t.plan_spread("pickplace") == pytest.approx(t.plan_spread("maze") * ratio)
+        assert t.plan_spread("maze") == t.plan_spread_maze
 
 
 def test_population_rejects_impossible_settings():
@@ -120,7 +126,7 @@ def test_plan_repeats_on_purpose_and_starts_from_lessons():
     pts = np.array([[x, y] for y in range(5) for x in range(5)], float)
 
     def model(**kw):
-        return TeacherModel(traits(**kw), np.random.default_rng(0), pts, (0, 0), (4, 4), 3)
+        return TeacherModel(traits(**kw), np.random.default_rng(0), pts, (0, 0), (4, 4), 3, 0.2)
 
     never = model(repeat_rate=0.0)
     assert all(never.nearest(never.plan_point(avoid=[12])) != 12 for _ in range(20))

@@ -30,7 +30,7 @@ a. (pick-and-place) if the robot was just seen failing at the plant the teacher
 b. otherwise, if some realisation is remembered failing, they aim at the densest
    failing region (with their aiming imprecision ``aim_sd``);
 c. otherwise they follow their own plan of where demos should go (their idea of B,
-   :math:`\tilde B`: around ``plan_focus`` with scatter ``plan_spread``), now and then
+   :math:`\tilde B`: around ``plan_focus`` with scatter ``plan_spread_*``), now and then
    repeating a demo on purpose (``repeat_rate``).
 
 Between runs (Experiment 2) the teacher remembers where they saw the robot fail and
@@ -168,10 +168,15 @@ class TeacherModel:
         Corners of the region the teacher may start demos in (task units).
     enough_demos : int
         The teacher's prior count for this task.
+    spread : float
+        How widely the teacher's own plan scatters demos on this task (unit box).
     """
 
-    def __init__(self, traits: TeacherTraits, rng, points, lower, upper, enough_demos: int):
+    def __init__(
+        self, traits: TeacherTraits, rng, points, lower, upper, enough_demos: int, spread: float
+    ):
         self.traits = traits
+        self.spread = float(spread)
         self.rng = rng
         self.points = np.asarray(points, dtype=float)
         self.lower = np.asarray(lower, dtype=float)
@@ -201,7 +206,7 @@ class TeacherModel:
             return self.points[int(self.rng.choice(avoid))].copy()
         point = None
         for _ in range(4):  # otherwise people do not mean to repeat a demo exactly
-            unit = np.clip(np.asarray(t.plan_focus) + self.rng.normal(0, t.plan_spread, 2), 0, 1)
+            unit = np.clip(np.asarray(t.plan_focus) + self.rng.normal(0, self.spread, 2), 0, 1)
             point = self.lower + unit * (self.upper - self.lower)
             if not avoid or self.nearest(point) not in avoid:
                 break

@@ -76,7 +76,8 @@ class PickPlaceTeacher:
     def _model(self, rng) -> TeacherModel:
         plants = self.task.conditions[:, :2]
         lo, hi = plants.min(axis=0), plants.max(axis=0)
-        return TeacherModel(self.traits, rng, plants, lo, hi, self.traits.enough_pickplace)
+        t = self.traits
+        return TeacherModel(t, rng, plants, lo, hi, t.enough_pickplace, t.plan_spread("pickplace"))
 
     def teach(self, condition: str, rng, run: PickPlaceRun | None = None) -> PickPlaceRun:
         """Teach one 15-minute run under ``condition``; returns the finished run.
