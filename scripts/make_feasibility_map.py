@@ -1,6 +1,6 @@
 """Build ``assets/feasibility_map.npz``: where the Panda's tool can be in the pick-and-place scene.
 
-The map is a voxel grid over the region the task uses (x 0.10 .. 0.80, y -0.45 .. 0.65,
+The map is a voxel grid over the region the task uses (x -0.25 .. 0.90, y -0.70 .. 0.75,
 z -0.05 .. 0.65 m, 1 cm voxels; edit ``GRID`` to change it). A voxel centre is in X
 when the tool reaches it pointing down (:data:`tutor.robot.DOWN`) within
 :data:`tutor.robot.REACH_TOL` and :data:`tutor.robot.TILT_TOL`, with the fingers open,
@@ -51,7 +51,7 @@ from tutor.robot import (  # noqa: E402
 from tutor.tasks.pickplace import load_scene  # noqa: E402
 
 #: The region the task uses (m, robot base frame): lower and upper voxel centres.
-GRID = {"lower": (0.10, -0.45, -0.05), "upper": (0.80, 0.65, 0.65)}
+GRID = {"lower": (-0.25, -0.70, -0.05), "upper": (0.90, 0.75, 0.65)}
 TILT_LENGTH = 0.1  # m per rad: turns a rotation error into a length for the margin
 
 _STATE: dict = {}

@@ -207,6 +207,8 @@ def test_map_agrees_with_full_checks_on_500_realisations(task):
     truth = full.path_ok(R[..., :3], R[..., 3])
     fast = task.feasibility.path_ok(R[..., :3], R[..., 3])
     agree = float(np.mean(truth == fast))
+    map_only = float(np.mean(truth == task.feasibility.map.path_ok(R[..., :3], R[..., 3])))
+    assert map_only >= 0.98  # the map's grid covers where realisations go
     print(
         f"\nmap vs full IK + collisions on 500 TP-GMM realisations: {agree:.1%} agree "
         f"({truth.mean():.0%} in X)"
