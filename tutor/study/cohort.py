@@ -64,9 +64,11 @@ class StudySettings:
         plant* are 1.5-2.6 cm apart on average (timing varies), neighbouring plants
         about 3 cm. 3 cm counts a demo at the same or the next plant as "similar".
     pickplace_feasibility : bool
-        Whether realisations are also checked against the arm's feasibility map. Off:
-        the cohort judges table, tray, grab and release only (the arm check costs
-        about a second per demo).
+        Whether criterion (i) also checks the arm (the task's ``feasibility="map"``).
+        Off: the cohort judges table, tray, grab and release only. Measured at seed 0
+        with the paper's cohort: the same numbers either way (no realisation failed
+        only because of the arm), in 9 s off and 77 s on (wide realisations of
+        one-demo models still fall back to full IK checks).
     """
 
     target: float = 0.9
