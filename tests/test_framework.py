@@ -345,3 +345,14 @@ def test_explicit_condition_is_kept_and_round_trips(task, tmp_path):
     loaded = TeachingSession.load(s.save(tmp_path / "s.json"), task)
     np.testing.assert_allclose(loaded.conditions[0], [0.031, 0.029])
     assert loaded.latest.efficacy == s.latest.efficacy
+
+
+def test_a_copied_session_shares_its_task():
+    import copy
+
+    from tutor.tasks.maze import MazeTask
+
+    task = MazeTask()
+    session = TeachingSession(task)
+    twin = copy.deepcopy(session)
+    assert twin.task is task and twin is not session

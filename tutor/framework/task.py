@@ -50,6 +50,11 @@ class Task(ABC):
     condition_noun: str = "test condition"
     condition_noun_plural: str = "test conditions"
 
+    def __deepcopy__(self, memo):
+        # A task is a fixed definition (geometry, criteria, robot models), shared by
+        # every copy of a session rather than copied with it.
+        return self
+
     def format_distance(self, distance: float) -> str:
         """A distance in the task's units, in words for a trainee."""
         return f"{distance:.3g}"
