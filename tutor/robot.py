@@ -1087,7 +1087,9 @@ class MapCheck:
     The map covers where realisations usually go; a realisation that leaves the grid
     (models taught with one or two demos swing wide) but stays within the arm's reach
     is followed with full IK and collision checks instead of being called outside X.
-    Samples beyond ``reach`` of the shoulder are outside X without further checks.
+    Samples beyond ``reach`` of ``shoulder`` are outside X without further checks, and
+    so are off-grid samples after a path's first sample the map rejects (a path is
+    judged by its first failure).
 
     Parameters
     ----------
@@ -1095,12 +1097,15 @@ class MapCheck:
     arm : Arm
         The arm with the scene's obstacles (the same the map was built for).
     shoulder : array_like (3,)
-        Centre of the reach sphere (m); the Panda's joint 2 axis.
+        Centre of the sphere the tool can reach pointing down (m): the Panda's
+        shoulder (joint 2 at z = 0.333 m) less the 0.103 m from its flange down to
+        the tool centre point.
     reach : float
-        Radius of the reach sphere (m); the Panda reaches 0.855 m.
+        Radius of that sphere (m): the flange stays within 0.858 m of the shoulder
+        (measured over 20 000 random configurations), plus a little margin.
     """
 
-    def __init__(self, fmap: FeasibilityMap, arm: Arm, shoulder=(0.0, 0.0, 0.333), reach=0.95):
+    def __init__(self, fmap: FeasibilityMap, arm: Arm, shoulder=(0.0, 0.0, 0.23), reach=0.87):
         self.map = fmap
         self.full = FullCheck(arm)
         self.shoulder = _vector(shoulder, 3, "shoulder")
@@ -1125,9 +1130,15 @@ class MapCheck:
         P, G = check_paths(points, gripper)
         value = self.map.value(P, G)
         out = value > 0
-        off_grid = np.isneginf(value)
         near = np.linalg.norm(P - self.shoulder, axis=-1) <= self.reach
-        redo = (off_grid & near).any(axis=-1)  # (...)
+        unknown = np.isneginf(value) & near  # off the grid but maybe reachable
+        known_bad = ~out & ~unknown
+        T = P.shape[-2]
+        first_unknown = np.where(unknown.any(axis=-1), np.argmax(unknown, axis=-1), T)
+        first_bad = np.where(known_bad.any(axis=-1), np.argmax(known_bad, axis=-1), T)
+        # a path is judged by its first sample outside X: follow it in full only when
+        # an unknown sample comes before any the map already rejects
+        redo = first_unknown < first_bad  # (...)
         if redo.any():
             idx = np.nonzero(redo)
             out[idx] = self.full.contains(P[idx], G[idx])
