@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import paper, stats
+from . import paper, replication, stats
 from .cohort import CohortResult, run_experiment
 
-__all__ = ["analyse", "format_report", "save_result", "robustness"]
+__all__ = ["analyse", "format_report", "replication_table", "save_result", "robustness"]
 
 
 def analyse(result: CohortResult) -> dict:
@@ -26,7 +26,21 @@ def analyse(result: CohortResult) -> dict:
     }
     if exp == 2:
         out["failures"] = stats.failure_table(runs)
+        out["replication"] = replication_table(runs)
     return out
+
+
+def replication_table(runs: pd.DataFrame, n_boot: int = 2000, seed: int = 0) -> pd.DataFrame:
+    """Replication rates of Experiment 2's conclusions (see :mod:`.replication`).
+
+    Columns: ``this cohort`` (teachers resampled as simulated), ``paper's means`` (each
+    condition rescaled to the paper's totals first) and ``8 of 10 seeds`` (the chance
+    that a conclusion with the paper-matched rate holds in at least 8 of 10 cohorts).
+    """
+    own = replication.replication_rates(runs, n_boot, seed)
+    matched = replication.replication_rates(runs, n_boot, seed, match_paper=True)
+    chance = matched.map(lambda r: replication.chance_of_at_least(8, 10, r))
+    return pd.DataFrame({"this cohort": own, "paper's means": matched, "8 of 10 seeds": chance})
 
 
 def _pct(x) -> str:
@@ -93,6 +107,13 @@ def format_report(result: CohortResult, analysis: dict) -> str:
         both = fail.astype(str) + " (" + ref.astype(str) + ")"
         lines.append("Failures over all teachers and runs: simulation (paper)")
         lines.append(both.to_string())
+        lines.append("")
+        lines.append(
+            "How often each conclusion comes out again with 9 teachers per condition "
+            "(bootstrap over teachers; 'paper's means': conditions rescaled to the paper's "
+            "totals first):"
+        )
+        lines.append(analysis["replication"].to_string(float_format=lambda v: f"{v:.2f}"))
     lines.append("")
     lines.append("The paper's conclusions on this cohort:")
     for k, v in analysis["conclusions"].items():
@@ -164,5 +185,8 @@ def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> p
         row.update({f"relative {k}": v for k, v in a["relative"].items()})
         key = "medians" if experiment == 1 else "means"
         row.update({f"eta {c}": v for c, v in a["stats"][key].items()})
+        if experiment == 2:
+            matched = a["replication"]["paper's means"]
+            row.update({f"paper-matched rate: {k}": v for k, v in matched.items()})
         rows.append(row)
     return pd.DataFrame(rows)

@@ -1,0 +1,146 @@
+"""Replication rates of Experiment 2's conclusions (tutor.study.replication)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tutor.errors import InvalidParameterError
+from tutor.study import paper
+from tutor.study.replication import (
+    CONCLUSIONS,
+    chance_of_at_least,
+    replication_rates,
+    teacher_totals,
+)
+
+CONDS = ("NF", "RF", "BF", "SF")
+
+
+def _cohort(values: dict, per: int = 3, seed: int = 0, noise: float = 0.0) -> pd.DataFrame:
+    """``values[cond] = (errors, undemonstrated, ambiguous, eta)`` per run."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for i, cond in enumerate(CONDS):
+        for j in range(per):
+            teacher = i * per + j
+            for run in (1, 2, 3):
+                e, u, a, eta = values[cond]
+                rows.append(
+                    {
+                        "teacher": teacher,
+                        "condition": cond,
+                        "run": run,
+                        "errors": e,
+                        "undemonstrated": max(0, int(u + noise * rng.normal() * 50)),
+                        "ambiguous": a,
+                        "eta": eta,
+                    }
+                )
+    runs = pd.DataFrame(rows)
+    runs["condition"] = pd.Categorical(runs["condition"], categories=CONDS, ordered=True)
+    return runs
+
+
+PAPERLIKE = {
+    "NF": (1, 10, 2, 0.12),
+    "RF": (0, 20, 2, 0.13),
+    "BF": (1, 30, 0, 0.24),
+    "SF": (1, 10, 1, 0.15),
+}
+
+
+def test_teacher_totals_sum_counts_and_average_eta():
+    runs = _cohort(PAPERLIKE, per=2)
+    runs.loc[runs.teacher == 0, "eta"] = [0.1, 0.2, 0.3]
+    table = teacher_totals(runs)
+    assert len(table) == 8
+    first = table.iloc[0]
+    assert first.condition == "NF" and first.undemonstrated == 30 and first.errors == 3
+    assert first.eta == pytest.approx(0.2)
+
+
+def test_clear_cut_cohort_replicates_every_time():
+    rates = replication_rates(_cohort(PAPERLIKE), n_boot=200)
+    assert list(rates.index) == list(CONCLUSIONS)
+    assert (rates == 1.0).all()
+
+
+def test_reversed_cohort_never_replicates():
+    reversed_ = {
+        c: (v[0] + 2 * (c == "RF"), 40 - v[1], 3 - v[2], 0.4 - v[3]) for c, v in PAPERLIKE.items()
+    }
+    rates = replication_rates(_cohort(reversed_), n_boot=200)
+    assert (rates == 0.0).all()
+
+
+def test_noisy_cohort_gives_a_rate_between_and_is_seeded():
+    close = {**PAPERLIKE, "RF": (0, 28, 2, 0.13)}
+    runs = _cohort(close, per=9, noise=1.0, seed=3)
+    a = replication_rates(runs, n_boot=500, seed=1)
+    b = replication_rates(runs, n_boot=500, seed=1)
+    pd.testing.assert_series_equal(a, b)
+    assert 0.05 < a["BF most undemonstrated"] < 0.95
+
+
+def test_match_paper_rescales_each_condition_to_the_papers_totals():
+    # identical teachers within a condition: the rescaled sums are the paper's exactly,
+    # so every paper conclusion holds in every draw, whatever the simulation's own ranks
+    flat = {c: (1, 10, 1, 0.1) for c in CONDS}
+    rates = replication_rates(_cohort(flat), n_boot=200, match_paper=True)
+    ref = paper.EXPERIMENT_2["failures"]
+    assert ref["undemonstrated"]["BF"] == max(ref["undemonstrated"].values())
+    assert (rates == 1.0).all()
+
+
+def test_match_paper_gives_nan_when_no_rescaling_exists():
+    zero_bf_ambiguous = {**PAPERLIKE, "BF": (1, 30, 0, 0.24)}  # paper's BF has 6
+    rates = replication_rates(_cohort(zero_bf_ambiguous), n_boot=200, match_paper=True)
+    assert np.isnan(rates["BF fewest ambiguous"])
+    assert rates["BF most undemonstrated"] == 1.0
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        (lambda r: r.drop(columns="ambiguous"), "lacks the columns"),
+        (lambda r: r[r.condition != "SF"], "Experiment 2's conditions"),
+    ],
+)
+def test_bad_frames_are_named_errors(change, match):
+    with pytest.raises(InvalidParameterError, match=match):
+        replication_rates(change(_cohort(PAPERLIKE)), n_boot=200)
+
+
+def test_bad_settings_are_named_errors():
+    with pytest.raises(InvalidParameterError, match="n_boot"):
+        replication_rates(_cohort(PAPERLIKE), n_boot=10)
+    with pytest.raises(InvalidParameterError, match="0 <= k <= n"):
+        chance_of_at_least(11, 10, 0.5)
+    with pytest.raises(InvalidParameterError, match="rate must be"):
+        chance_of_at_least(8, 10, 1.5)
+
+
+def test_chance_of_at_least_is_the_binomial_tail():
+    assert chance_of_at_least(8, 10, 1.0) == pytest.approx(1.0)
+    assert chance_of_at_least(8, 10, 0.5) == pytest.approx(56 / 1024)
+    assert chance_of_at_least(0, 10, 0.3) == pytest.approx(1.0)
+    assert np.isnan(chance_of_at_least(8, 10, float("nan")))
+
+
+def test_experiment2_report_prints_the_replication_rates(tmp_path):
+    from tutor.study import analyse, format_report, run_experiment, save_result
+
+    result = run_experiment(2, seed=2, n=8, workers=2, progress=False)
+    analysis = analyse(result)
+    table = analysis["replication"]
+    assert list(table.columns) == ["this cohort", "paper's means", "8 of 10 seeds"]
+    assert list(table.index) == list(CONCLUSIONS)
+    text = format_report(result, analysis)
+    assert "How often each conclusion comes out again" in text
+    paths = save_result(result, analysis, tmp_path, figures=False)
+    import json
+
+    summary = json.loads(paths["summary"].read_text())
+    assert set(summary["replication"]) == set(CONCLUSIONS)
