@@ -144,3 +144,16 @@ def test_experiment2_report_prints_the_replication_rates(tmp_path):
 
     summary = json.loads(paths["summary"].read_text())
     assert set(summary["replication"]) == set(CONCLUSIONS)
+
+
+def test_robustness_command_prints_paper_matched_rates(tmp_path, capsys):
+    from tutor.__main__ import main
+
+    args = ["robustness", "--experiment", "2", "--n", "8", "--seeds", "1"]
+    code = main([*args, "--out", str(tmp_path), "--workers", "2", "--no-progress"])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "If the conditions' means were the paper's" in out
+    assert "BF most undemonstrated:" in out
+    table = pd.read_csv(tmp_path / "experiment2_robustness.csv")
+    assert "paper-matched rate: BF most undemonstrated" in table.columns
