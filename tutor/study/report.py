@@ -113,7 +113,8 @@ def format_report(result: CohortResult, analysis: dict) -> str:
             "(bootstrap over teachers; 'paper's means': conditions rescaled to the paper's "
             "totals first):"
         )
-        lines.append(analysis["replication"].to_string(float_format=lambda v: f"{v:.2f}"))
+        table = analysis["replication"]
+        lines.append(table.to_string(float_format=lambda v: f"{v:.2f}", na_rep="n/a"))
     lines.append("")
     lines.append("The paper's conclusions on this cohort:")
     for k, v in analysis["conclusions"].items():
