@@ -157,3 +157,4 @@ def test_robustness_command_prints_paper_matched_rates(tmp_path, capsys):
     assert "BF most undemonstrated:" in out
     table = pd.read_csv(tmp_path / "experiment2_robustness.csv")
     assert "paper-matched rate: BF most undemonstrated" in table.columns
+    assert {"undemonstrated BF", "errors RF", "ambiguous NF"} <= set(table.columns)

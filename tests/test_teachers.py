@@ -27,6 +27,8 @@ BASE = TeacherTraits(
     plan_focus=(0.5, 0.5),
     plan_spread_maze=0.2,
     plan_spread_pickplace=0.2,
+    plan_choices_maze=1,
+    plan_choices_pickplace=1,
     aim_sd=0.02,
     motor_noise=0.003,
     slip_rate=0.0,
@@ -136,6 +138,26 @@ def test_plan_repeats_on_purpose_and_starts_from_lessons():
     remembering.lessons = [3, 20, 4]
     firsts = [remembering.nearest(remembering.plan_point(avoid=[20])) for _ in range(2)]
     assert firsts == [3, 4]  # remembered failures first, skipping what was demonstrated
+
+
+def test_plan_weighing_places_spreads_demos_out():
+    from tutor.teachers.model import TeacherModel
+
+    pts = np.array([[x, y] for y in range(11) for x in range(11)], float)
+    given = [60]  # the centre
+
+    def mean_gap(choices):
+        m = TeacherModel(traits(), np.random.default_rng(1), pts, (0, 0), (10, 10), 3, 0.3, choices)
+        picks = np.array([m.plan_point(avoid=given) for _ in range(300)])
+        return np.linalg.norm(picks - pts[60], axis=1).mean()
+
+    assert mean_gap(3) > 1.3 * mean_gap(1)  # the farthest of three lands farther away
+    first = TeacherModel(traits(), np.random.default_rng(1), pts, (0, 0), (10, 10), 3, 0.3, 4)
+    assert first.plan_point(avoid=[]) is not None  # nothing given yet: the first place
+    assert DEFAULT_POPULATION.sample(np.random.default_rng(0)).plan_choices("maze") == 1
+    assert DEFAULT_POPULATION.sample(np.random.default_rng(0)).plan_choices("pickplace") == 2
+    with pytest.raises(InvalidParameterError, match="plan_choices"):
+        Population(plan_choices_pickplace=0)
 
 
 # --------------------------------------------------------------------------- maze teachers

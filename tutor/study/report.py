@@ -187,6 +187,9 @@ def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> p
         key = "medians" if experiment == 1 else "means"
         row.update({f"eta {c}": v for c, v in a["stats"][key].items()})
         if experiment == 2:
+            fail = a["failures"]
+            for kind in fail.index:
+                row.update({f"{kind} {c}": int(fail.loc[kind, c]) for c in fail.columns})
             matched = a["replication"]["paper's means"]
             row.update({f"paper-matched rate: {k}": v for k, v in matched.items()})
         rows.append(row)

@@ -86,7 +86,14 @@ class MazeTeacher:
         lower = np.array([zone.x0 + margin, zone.y0 + margin])
         upper = np.array([zone.x1 - margin, zone.y1 - margin])
         model = TeacherModel(
-            t, rng, task.conditions, lower, upper, t.enough_maze, t.plan_spread("maze")
+            t,
+            rng,
+            task.conditions,
+            lower,
+            upper,
+            t.enough_maze,
+            t.plan_spread("maze"),
+            t.plan_choices("maze"),
         )
         session = TeachingSession(task, feedback=MAZE_CONDITIONS[condition])
         meta = session.meta

@@ -30,7 +30,8 @@ a. (pick-and-place) if the robot was just seen failing at the plant the teacher
 b. otherwise, if some realisation is remembered failing, they aim at the densest
    failing region (with their aiming imprecision ``aim_sd``);
 c. otherwise they follow their own plan of where demos should go (their idea of B,
-   :math:`\tilde B`: around ``plan_focus`` with scatter ``plan_spread_*``), now and then
+   :math:`\tilde B`: around ``plan_focus`` with scatter ``plan_spread_*``, weighing
+   ``plan_choices_*`` places and taking the one farthest from their demos), now and then
    repeating a demo on purpose (``repeat_rate``).
 
 Between runs (Experiment 2) the teacher remembers where they saw the robot fail and
@@ -170,13 +171,25 @@ class TeacherModel:
         The teacher's prior count for this task.
     spread : float
         How widely the teacher's own plan scatters demos on this task (unit box).
+    choices : int
+        How many places from their plan the teacher weighs for the next demo; they take
+        the one farthest from the demos already given (1: the first that comes to mind).
     """
 
     def __init__(
-        self, traits: TeacherTraits, rng, points, lower, upper, enough_demos: int, spread: float
+        self,
+        traits: TeacherTraits,
+        rng,
+        points,
+        lower,
+        upper,
+        enough_demos: int,
+        spread: float,
+        choices: int = 1,
     ):
         self.traits = traits
         self.spread = float(spread)
+        self.choices = int(choices)
         self.rng = rng
         self.points = np.asarray(points, dtype=float)
         self.lower = np.asarray(lower, dtype=float)
@@ -193,8 +206,9 @@ class TeacherModel:
 
         First the places remembered from an earlier run (:attr:`lessons`) not yet
         demonstrated; else, with chance ``repeat_rate``, one of the demos already given
-        (``avoid``) again; else a point around ``plan_focus`` (redrawn up to three times
-        if it lands on a demonstrated condition).
+        (``avoid``) again; else a point around ``plan_focus``: with ``choices`` > 1 the
+        one of that many farthest from the demos given, otherwise the first (redrawn up to
+        three times if it lands on a demonstrated condition).
         """
         t = self.traits
         avoid = [int(i) for i in avoid]
@@ -204,6 +218,15 @@ class TeacherModel:
                 return self.points[index].copy()
         if avoid and self.rng.random() < t.repeat_rate:
             return self.points[int(self.rng.choice(avoid))].copy()
+        if self.choices > 1 and avoid:
+            # weigh a few places and take the one farthest from the demos given so far
+            unit = np.clip(
+                np.asarray(t.plan_focus) + self.rng.normal(0, self.spread, (self.choices, 2)), 0, 1
+            )
+            places = self.lower + unit * (self.upper - self.lower)
+            given = self.points[avoid]
+            gap = np.linalg.norm(places[:, None] - given[None], axis=2).min(axis=1)
+            return places[int(np.argmax(gap))]
         point = None
         for _ in range(4):  # otherwise people do not mean to repeat a demo exactly
             unit = np.clip(np.asarray(t.plan_focus) + self.rng.normal(0, self.spread, 2), 0, 1)

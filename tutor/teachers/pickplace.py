@@ -77,7 +77,16 @@ class PickPlaceTeacher:
         plants = self.task.conditions[:, :2]
         lo, hi = plants.min(axis=0), plants.max(axis=0)
         t = self.traits
-        return TeacherModel(t, rng, plants, lo, hi, t.enough_pickplace, t.plan_spread("pickplace"))
+        return TeacherModel(
+            t,
+            rng,
+            plants,
+            lo,
+            hi,
+            t.enough_pickplace,
+            t.plan_spread("pickplace"),
+            t.plan_choices("pickplace"),
+        )
 
     def teach(self, condition: str, rng, run: PickPlaceRun | None = None) -> PickPlaceRun:
         """Teach one 15-minute run under ``condition``; returns the finished run.
