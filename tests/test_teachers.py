@@ -128,7 +128,8 @@ def test_plan_repeats_on_purpose_and_starts_from_lessons():
     pts = np.array([[x, y] for y in range(5) for x in range(5)], float)
 
     def model(**kw):
-        return TeacherModel(traits(**kw), np.random.default_rng(0), pts, (0, 0), (4, 4), 3, 0.2)
+        person = traits(enough_maze=3, plan_spread_maze=0.2, **kw)
+        return TeacherModel(person, np.random.default_rng(0), pts, (0, 0), (4, 4), "maze")
 
     never = model(repeat_rate=0.0)
     assert all(never.nearest(never.plan_point(avoid=[12])) != 12 for _ in range(20))
@@ -147,12 +148,14 @@ def test_plan_weighing_places_spreads_demos_out():
     given = [60]  # the centre
 
     def mean_gap(choices):
-        m = TeacherModel(traits(), np.random.default_rng(1), pts, (0, 0), (10, 10), 3, 0.3, choices)
+        person = traits(enough_maze=3, plan_spread_maze=0.3, plan_choices_maze=choices)
+        m = TeacherModel(person, np.random.default_rng(1), pts, (0, 0), (10, 10), "maze")
         picks = np.array([m.plan_point(avoid=given) for _ in range(300)])
         return np.linalg.norm(picks - pts[60], axis=1).mean()
 
     assert mean_gap(3) > 1.3 * mean_gap(1)  # the farthest of three lands farther away
-    first = TeacherModel(traits(), np.random.default_rng(1), pts, (0, 0), (10, 10), 3, 0.3, 4)
+    person = traits(enough_maze=3, plan_spread_maze=0.3, plan_choices_maze=4)
+    first = TeacherModel(person, np.random.default_rng(1), pts, (0, 0), (10, 10), "maze")
     assert first.plan_point(avoid=[]) is not None  # nothing given yet: the first place
     assert DEFAULT_POPULATION.sample(np.random.default_rng(0)).plan_choices("maze") == 1
     assert DEFAULT_POPULATION.sample(np.random.default_rng(0)).plan_choices("pickplace") == 2

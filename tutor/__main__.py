@@ -50,8 +50,13 @@ def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     from .errors import InvalidParameterError, TutorError
     from .study.cohort import check_request
-    from .study.replication import chance_of_at_least
-    from .study.report import analyse, format_report, robustness, save_result
+    from .study.report import (
+        analyse,
+        format_report,
+        robustness,
+        robustness_summary,
+        save_result,
+    )
 
     try:
         if args.command == "reproduce":
@@ -81,27 +86,7 @@ def main(argv=None) -> int:
                 progress=not args.no_progress,
             )
             print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
-            held = {c: int(table[c].sum()) for c in table.columns if table[c].dtype == bool}
-            print(f"\nseeds where each conclusion holds (of {len(table)}):")
-            for k, v in held.items():
-                print(f"  {k}: {v}")
-            rates = [c for c in table.columns if c.startswith("paper-matched rate: ")]
-            if rates:
-                print(
-                    "\nIf the conditions' means were the paper's (teachers' spread as simulated),"
-                    "\nhow often 9 teachers per condition would find each conclusion, mean over"
-                    " seeds,\nand the chance that it then holds in at least 8 of 10 seeds:"
-                )
-                for c in rates:
-                    known = table[c].dropna()
-                    name = c.split(": ", 1)[1]
-                    if known.empty:
-                        print(f"  {name}: n/a (the simulation has 0 where the paper has more)")
-                        continue
-                    rate = float(known.mean())
-                    chance = chance_of_at_least(8, 10, rate)
-                    where = "" if len(known) == len(table) else f", from {len(known)} seeds"
-                    print(f"  {name}: {rate:.2f} (8 of 10: {chance:.2f}{where})")
+            print("\n" + robustness_summary(table))
             os.makedirs(args.out, exist_ok=True)
             path = os.path.join(args.out, f"experiment{args.experiment}_robustness.csv")
             table.to_csv(path, index=False)

@@ -32,11 +32,13 @@ from scipy.stats import binom
 
 from ..errors import InvalidParameterError
 from . import paper
+from .cohort import EXPERIMENTS
+from .stats import experiment2_ranking
 
 __all__ = ["teacher_totals", "replication_rates", "chance_of_at_least"]
 
 COUNTS = ("errors", "undemonstrated", "ambiguous")
-CONDITIONS = ("NF", "RF", "BF", "SF")
+CONDITIONS = EXPERIMENTS[2]["conditions"]
 #: the conclusions a bootstrap can recompute (the ANOVA is not redone per draw)
 CONCLUSIONS = ("BF best", "BF fewest ambiguous", "BF most undemonstrated", "RF fewest errors")
 
@@ -121,22 +123,19 @@ def replication_rates(
         picked = values[idx]  # (n_boot, n_c, 4)
         draws[c] = np.concatenate([picked[..., :3].sum(axis=1), picked[..., 3:].mean(axis=1)], 1)
     stack = np.stack([draws[c] for c in CONDITIONS])  # (4 conditions, n_boot, 4 measures)
-    bf, rf = CONDITIONS.index("BF"), CONDITIONS.index("RF")
-    others = [i for i in range(len(CONDITIONS)) if i != bf]
-    err, und, amb, eta = (stack[..., j] for j in range(4))
-
-    def rate(holds: np.ndarray, measure: np.ndarray) -> float:
-        return float("nan") if np.isnan(measure).any() else float(holds.mean())
-
-    return pd.Series(
-        {
-            "BF best": rate((eta[bf] > eta[others]).all(axis=0), eta),
-            "BF fewest ambiguous": rate(amb[bf] <= amb.min(axis=0), amb),
-            "BF most undemonstrated": rate(und[bf] >= und.max(axis=0), und),
-            "RF fewest errors": rate(err[rf] <= err.min(axis=0), err),
-        },
-        name="replication rate",
-    )
+    measures = {k: stack[..., j] for j, k in enumerate((*COUNTS, "eta"))}
+    holds = experiment2_ranking(CONDITIONS, **measures)
+    uses = {
+        "BF best": "eta",
+        "BF fewest ambiguous": "ambiguous",
+        "BF most undemonstrated": "undemonstrated",
+        "RF fewest errors": "errors",
+    }
+    rates = {
+        k: float("nan") if np.isnan(measures[uses[k]]).any() else float(holds[k].mean())
+        for k in CONCLUSIONS
+    }
+    return pd.Series(rates, name="replication rate")
 
 
 def chance_of_at_least(k: int, n: int, rate: float) -> float:

@@ -25,6 +25,7 @@ __all__ = [
     "failure_table",
     "relative_improvement",
     "conclusions",
+    "experiment2_ranking",
     "summary_table",
 ]
 
@@ -214,17 +215,43 @@ def conclusions(runs: pd.DataFrame, experiment: int, stats: dict | None = None) 
             "VF~VR": bool(_p(pairs, "VF", "VR") >= ALPHA),
         }
     st = experiment2_stats(runs) if stats is None else stats
-    means = st["means"]
     fail = failure_table(runs)
-    others = ("NF", "RF", "SF")
+    conds = list(fail.columns)
+    measures = {k: fail.loc[k].to_numpy(float) for k in ("errors", "undemonstrated", "ambiguous")}
+    measures["eta"] = np.array([st["means"][c] for c in conds])
+    ranks = experiment2_ranking(conds, **measures)
     return {
         "condition effect": bool(st["anova"]["condition"]["p"] < ALPHA),
-        "BF best": bool(all(means["BF"] > means[c] for c in others)),
-        "BF fewest ambiguous": bool(fail.loc["ambiguous", "BF"] <= fail.loc["ambiguous"].min()),
-        "BF most undemonstrated": bool(
-            fail.loc["undemonstrated", "BF"] >= fail.loc["undemonstrated"].max()
-        ),
-        "RF fewest errors": bool(fail.loc["errors", "RF"] <= fail.loc["errors"].min()),
+        **{k: bool(v) for k, v in ranks.items()},
+    }
+
+
+def experiment2_ranking(conditions, errors, undemonstrated, ambiguous, eta) -> dict:
+    """Experiment 2's ranking conclusions from per-condition measures (ties count).
+
+    Parameters
+    ----------
+    conditions : sequence of str
+        The order of the first axis of the measures (must hold NF, RF, BF and SF).
+    errors, undemonstrated, ambiguous : ndarray (n_conditions, ...)
+        Failure totals per condition (any trailing shape, e.g. bootstrap draws).
+    eta : ndarray (n_conditions, ...)
+        Mean teaching efficiency per condition.
+
+    Returns
+    -------
+    dict of bool ndarray (...)
+        ``BF best``, ``BF fewest ambiguous``, ``BF most undemonstrated``, ``RF fewest
+        errors``.
+    """
+    conditions = list(conditions)
+    bf, rf = conditions.index("BF"), conditions.index("RF")
+    others = [i for i in range(len(conditions)) if i != bf]
+    return {
+        "BF best": (eta[bf] > eta[others]).all(axis=0),
+        "BF fewest ambiguous": ambiguous[bf] <= ambiguous.min(axis=0),
+        "BF most undemonstrated": undemonstrated[bf] >= undemonstrated.max(axis=0),
+        "RF fewest errors": errors[rf] <= errors.min(axis=0),
     }
 
 

@@ -85,16 +85,7 @@ class MazeTeacher:
         zone, margin = task.layout.start_zone, 0.001
         lower = np.array([zone.x0 + margin, zone.y0 + margin])
         upper = np.array([zone.x1 - margin, zone.y1 - margin])
-        model = TeacherModel(
-            t,
-            rng,
-            task.conditions,
-            lower,
-            upper,
-            t.enough_maze,
-            t.plan_spread("maze"),
-            t.plan_choices("maze"),
-        )
+        model = TeacherModel(t, rng, task.conditions, lower, upper, "maze")
         session = TeachingSession(task, feedback=MAZE_CONDITIONS[condition])
         meta = session.meta
         meta.update(condition=condition, targets=[], slips=0, followed_rules=[])

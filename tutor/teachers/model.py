@@ -167,29 +167,18 @@ class TeacherModel:
         Where the test conditions lie (task units).
     lower, upper : array-like (2,)
         Corners of the region the teacher may start demos in (task units).
-    enough_demos : int
-        The teacher's prior count for this task.
-    spread : float
-        How widely the teacher's own plan scatters demos on this task (unit box).
-    choices : int
-        How many places from their plan the teacher weighs for the next demo; they take
-        the one farthest from the demos already given (1: the first that comes to mind).
+    task : {"maze", "pickplace"}
+        Which of the traits' per-task values apply: the prior count
+        (``enough_*``), how widely their own plan scatters demos (``plan_spread_*``, unit
+        box) and how many plan places they weigh for the next demo, taking the one
+        farthest from the demos already given (``plan_choices_*``).
     """
 
-    def __init__(
-        self,
-        traits: TeacherTraits,
-        rng,
-        points,
-        lower,
-        upper,
-        enough_demos: int,
-        spread: float,
-        choices: int = 1,
-    ):
+    def __init__(self, traits: TeacherTraits, rng, points, lower, upper, task: str):
         self.traits = traits
-        self.spread = float(spread)
-        self.choices = int(choices)
+        self.spread = traits.plan_spread(task)
+        self.choices = traits.plan_choices(task)
+        enough_demos = traits.enough_demos(task)
         self.rng = rng
         self.points = np.asarray(points, dtype=float)
         self.lower = np.asarray(lower, dtype=float)

@@ -76,17 +76,7 @@ class PickPlaceTeacher:
     def _model(self, rng) -> TeacherModel:
         plants = self.task.conditions[:, :2]
         lo, hi = plants.min(axis=0), plants.max(axis=0)
-        t = self.traits
-        return TeacherModel(
-            t,
-            rng,
-            plants,
-            lo,
-            hi,
-            t.enough_pickplace,
-            t.plan_spread("pickplace"),
-            t.plan_choices("pickplace"),
-        )
+        return TeacherModel(self.traits, rng, plants, lo, hi, "pickplace")
 
     def teach(self, condition: str, rng, run: PickPlaceRun | None = None) -> PickPlaceRun:
         """Teach one 15-minute run under ``condition``; returns the finished run.
