@@ -116,6 +116,9 @@ def test_bad_frames_are_named_errors(change, match):
 def test_bad_settings_are_named_errors():
     with pytest.raises(InvalidParameterError, match="n_boot"):
         replication_rates(_cohort(PAPERLIKE), n_boot=10)
+    for seed in (-1, 1.5, "x"):
+        with pytest.raises(InvalidParameterError, match="seed must be"):
+            replication_rates(_cohort(PAPERLIKE), n_boot=100, seed=seed)
     with pytest.raises(InvalidParameterError, match="0 <= k <= n"):
         chance_of_at_least(11, 10, 0.5)
     with pytest.raises(InvalidParameterError, match="rate must be"):

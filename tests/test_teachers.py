@@ -161,6 +161,8 @@ def test_plan_weighing_places_spreads_demos_out():
     assert DEFAULT_POPULATION.sample(np.random.default_rng(0)).plan_choices("pickplace") == 2
     with pytest.raises(InvalidParameterError, match="plan_choices"):
         Population(plan_choices_pickplace=0)
+    with pytest.raises(InvalidParameterError, match="task must be one of"):
+        TeacherModel(traits(), np.random.default_rng(1), pts, (0, 0), (10, 10), "mazes")
 
 
 # --------------------------------------------------------------------------- maze teachers

@@ -106,6 +106,8 @@ def replication_rates(
     """
     if not isinstance(n_boot, (int, np.integer)) or n_boot < 100:
         raise InvalidParameterError(f"n_boot must be an integer >= 100, got {n_boot!r}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise InvalidParameterError(f"seed must be an integer >= 0, got {seed!r}")
     table = teacher_totals(runs)
     rng = np.random.default_rng(seed)
     ref = paper.EXPERIMENT_2

@@ -27,7 +27,10 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 
-__all__ = ["Population", "TeacherTraits", "DEFAULT_POPULATION"]
+__all__ = ["Population", "TeacherTraits", "DEFAULT_POPULATION", "TASKS"]
+
+#: the tasks a teacher's per-task traits are kept for
+TASKS = ("maze", "pickplace")
 
 
 @dataclass(frozen=True)
@@ -100,17 +103,24 @@ class TeacherTraits:
     notice_rate: float
     repeat_rate: float
 
+    def _for(self, trait: str, task: str):
+        if task not in TASKS:
+            raise InvalidParameterError(
+                f"task must be one of {', '.join(map(repr, TASKS))}, got {task!r}"
+            )
+        return getattr(self, f"{trait}_{task}")
+
     def enough_demos(self, task: str) -> int:
         """The prior count for ``task`` ("maze" or "pickplace")."""
-        return self.enough_maze if task == "maze" else self.enough_pickplace
+        return self._for("enough", task)
 
     def plan_spread(self, task: str) -> float:
         """How widely their own plan scatters demos for ``task`` ("maze" or "pickplace")."""
-        return self.plan_spread_maze if task == "maze" else self.plan_spread_pickplace
+        return self._for("plan_spread", task)
 
     def plan_choices(self, task: str) -> int:
         """How many plan places they weigh for ``task`` ("maze" or "pickplace")."""
-        return self.plan_choices_maze if task == "maze" else self.plan_choices_pickplace
+        return self._for("plan_choices", task)
 
     def to_dict(self) -> dict:
         d = asdict(self)
