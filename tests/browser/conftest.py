@@ -6,6 +6,7 @@ autosave never writes outputs into the repository) and its own session folder.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
@@ -49,6 +50,27 @@ def wait_http(url: str, proc: subprocess.Popen, timeout: float = 90.0) -> None:
         except OSError:
             time.sleep(0.3)
     raise TimeoutError(f"{url} did not answer within {timeout} s")
+
+
+def start_notebook_kernel(url: str, token: str, path: str) -> str:
+    """Start the kernel session of notebook ``path`` through the server's REST API.
+
+    JupyterLab then attaches to this session when the notebook opens. Left to itself,
+    opening a notebook can start two kernels at once and shut one down; cells run
+    straight after may go to the one shut down and never execute. Returns the kernel id
+    (the page's own execution indicator says when it is idle).
+    """
+    body = json.dumps(
+        {"path": path, "type": "notebook", "name": path, "kernel": {"name": "python3"}}
+    ).encode()
+    request = urllib.request.Request(
+        f"{url}/api/sessions?token={token}",
+        data=body,
+        method="POST",
+        headers={"Content-Type": "application/json"},
+    )
+    with urllib.request.urlopen(request, timeout=60) as reply:
+        return json.loads(reply.read())["kernel"]["id"]
 
 
 def stop(proc: subprocess.Popen) -> None:

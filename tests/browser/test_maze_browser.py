@@ -15,7 +15,7 @@ import re
 import numpy as np
 import pytest
 
-from tests.browser.conftest import ARTIFACTS
+from tests.browser.conftest import ARTIFACTS, start_notebook_kernel
 from tutor.tasks.maze import load_layout
 
 pytestmark = pytest.mark.browser
@@ -111,6 +111,7 @@ def teach_one_demo(page, artifacts, name: str):
 
 def test_jupyterlab_draw_demos_and_measure_latency(page, jupyterlab, artifacts):
     url, token = jupyterlab
+    start_notebook_kernel(url, token, "02_maze_experiment.ipynb")
     page.goto(f"{url}/lab/tree/02_maze_experiment.ipynb?token={token}")
     page.locator(".jp-Notebook").wait_for(timeout=WIDGET_TIMEOUT_MS)
     idle = ".jp-Notebook-ExecutionIndicator[data-status='idle']"
