@@ -465,6 +465,19 @@ def test_map_file_loads_without_pickle(fmap):
     assert DEFAULT_MAP_PATH.stat().st_size < 2_000_000
 
 
+def _map_file(path, **fields):
+    """A map file with the right header and ``fields`` replacing its arrays."""
+    arrays = {
+        "format": np.array("lfd-tutor-feasibility-map"),
+        "version": np.array(1),
+        "origin": np.zeros(3),
+        "spacing": np.array(0.01),
+        **fields,
+    }
+    np.savez(path, **arrays)
+    return path
+
+
 def test_map_round_trip_and_bad_files(fmap, tmp_path):
     path = tmp_path / "map.npz"
     fmap.save(path)
@@ -477,30 +490,14 @@ def test_map_round_trip_and_bad_files(fmap, tmp_path):
     junk.write_bytes(b"not a zip file at all")
     with pytest.raises(InvalidFileError):
         FeasibilityMap.load(junk)
-    hostile = tmp_path / "hostile.npz"
-    np.savez(
-        hostile,
-        format=np.array("lfd-tutor-feasibility-map"),
-        version=np.array(1),
-        margin=np.array([{"a": 1}], dtype=object),
-        origin=np.zeros(3),
-        spacing=np.array(0.01),
-    )
+    hostile = _map_file(tmp_path / "hostile.npz", margin=np.array([{"a": 1}], dtype=object))
     with pytest.raises(InvalidFileError):
         FeasibilityMap.load(hostile)
     other = tmp_path / "other.npz"
     np.savez(other, x=np.zeros(3))
     with pytest.raises(InvalidFileError):
         FeasibilityMap.load(other)
-    old = tmp_path / "old.npz"
-    np.savez(
-        old,
-        format=np.array("lfd-tutor-feasibility-map"),
-        version=np.array(99),
-        margin=np.zeros((2, 2, 2)),
-        origin=np.zeros(3),
-        spacing=np.array(0.01),
-    )
+    old = _map_file(tmp_path / "old.npz", version=np.array(99), margin=np.zeros((2, 2, 2)))
     with pytest.raises(InvalidFileError, match="version"):
         FeasibilityMap.load(old)
 
