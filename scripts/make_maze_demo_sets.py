@@ -1,4 +1,4 @@
-"""Regenerate the bundled maze demonstration sets in assets/demos/.
+"""Regenerate the bundled maze demonstration sets in tutor/assets/demos/.
 
 Each demo is a scripted stroke through the maze's gaps (MazeLayout.reference_path),
 recorded as a person's mouse stroke would be: 80 Hz samples over 2-3.5 s, with a
@@ -19,7 +19,7 @@ import numpy as np
 from tutor.demofiles import save_demos
 from tutor.tasks.maze import load_layout
 
-OUT = Path(__file__).resolve().parents[1] / "assets" / "demos"
+OUT = Path(__file__).resolve().parents[1] / "tutor" / "assets" / "demos"
 RATE_HZ = 80.0
 
 

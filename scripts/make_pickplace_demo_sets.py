@@ -1,4 +1,4 @@
-"""Regenerate the bundled pick-and-place demonstration sets in assets/demos/.
+"""Regenerate the bundled pick-and-place demonstration sets in tutor/assets/demos/.
 
 Each demo is a kinesthetic-style recording made by :meth:`PickPlaceTask.demonstrate`
 (20 Hz; t in s, the gripper position x, y, z in m, the hand g: 0 open, 1 closed), as a
@@ -17,7 +17,7 @@ import numpy as np
 from tutor.demofiles import save_demos
 from tutor.tasks.pickplace import PickPlaceTask
 
-OUT = Path(__file__).resolve().parents[1] / "assets" / "demos"
+OUT = Path(__file__).resolve().parents[1] / "tutor" / "assets" / "demos"
 COLUMNS = ("t", "x", "y", "z", "g")
 
 #: name: (description, [(row, col, mistake), ...]); rows and columns count from 0

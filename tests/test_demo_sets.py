@@ -13,7 +13,7 @@ from tutor.errors import InvalidFileError
 from tutor.framework import AMBIGUOUS, INCORRECT, TeachingSession
 from tutor.tasks.maze import MazeTask
 
-ASSETS = Path(__file__).resolve().parents[1] / "assets" / "demos"
+ASSETS = Path(__file__).resolve().parents[1] / "tutor" / "assets" / "demos"
 
 
 @pytest.fixture(scope="module")

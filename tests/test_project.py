@@ -28,6 +28,7 @@ CONDA_NAME = {
     "pin": "pinocchio",
     "meshcat": "meshcat-python",
     "example-robot-data-loaders": "example-robot-data",
+    "build": "python-build",
 }
 # Not on conda-forge: environment.yml installs these in its `pip:` section.
 PIP_ONLY = {"gmr"}

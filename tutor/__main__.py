@@ -24,7 +24,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m tutor", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="lfd-tutor", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
     def common(p):
@@ -97,5 +97,10 @@ def main(argv=None) -> int:
     return 0
 
 
-if __name__ == "__main__":
+def run() -> None:
+    """Entry point of the ``lfd-tutor`` console script (the same as ``python -m tutor``)."""
     sys.exit(main())
+
+
+if __name__ == "__main__":
+    run()

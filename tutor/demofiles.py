@@ -31,12 +31,13 @@ import numpy as np
 
 from .errors import InvalidFileError
 from .fileio import MAX_FILE_BYTES, atomic_write_text, read_json, write_json
+from .resources import asset
 
 __all__ = ["DemoSet", "load_demos", "save_demos", "bundled_demos", "BUNDLED_DIR", "DEMOS_FORMAT"]
 
 DEMOS_FORMAT = "lfd-tutor-demos"
 #: where the demonstration sets shipped with the tutor live
-BUNDLED_DIR = Path(__file__).resolve().parents[1] / "assets" / "demos"
+BUNDLED_DIR = asset("demos")
 
 
 class DemoSet:

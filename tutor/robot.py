@@ -59,6 +59,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InvalidFileError, InvalidParameterError
+from .resources import asset
 
 __all__ = [
     "load_robot",
@@ -105,7 +106,7 @@ TILT_TOL = 0.05
 #: Opening of one finger joint with the hand open (m); closed is 0.
 FINGER_OPEN = 0.04
 
-DEFAULT_MAP_PATH = Path(__file__).resolve().parents[1] / "assets" / "feasibility_map.npz"
+DEFAULT_MAP_PATH = asset("feasibility_map.npz")
 MAP_FORMAT = "lfd-tutor-feasibility-map"
 MAP_VERSION = 1
 

@@ -25,7 +25,6 @@ the other.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -33,13 +32,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidDemoError
+from ..fileio import read_json
+from ..resources import asset
 from ..framework.task import Task, Verdict
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
 from .paths import minimum_jerk_through
 
 __all__ = ["Box", "MazeLayout", "MazeTask", "load_layout", "DEFAULT_LAYOUT_PATH"]
 
-DEFAULT_LAYOUT_PATH = Path(__file__).resolve().parents[2] / "assets" / "maze.json"
+DEFAULT_LAYOUT_PATH = asset("maze.json")
 
 
 @dataclass(frozen=True)
@@ -159,7 +160,7 @@ class MazeLayout:
 def load_layout(path=None) -> MazeLayout:
     """Read a maze layout from JSON (default: the bundled ``assets/maze.json``)."""
     path = DEFAULT_LAYOUT_PATH if path is None else Path(path)
-    data = json.loads(path.read_text())
+    data = read_json(path, "maze layout")
     grid = data.get("test_grid", {})
     return MazeLayout(
         workspace=Box.from_dict(data["workspace"], "workspace"),

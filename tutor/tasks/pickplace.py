@@ -21,7 +21,6 @@ where the scene and the learner settings live).
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -29,13 +28,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidDemoError, InvalidParameterError
+from ..fileio import read_json
+from ..resources import asset
 from ..framework.task import Task, Verdict
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
 from .paths import minimum_jerk_through
 
 __all__ = ["PickPlaceScene", "PickPlaceTask", "load_scene", "start_position", "DEFAULT_SCENE_PATH"]
 
-DEFAULT_SCENE_PATH = Path(__file__).resolve().parents[2] / "assets" / "pickplace.json"
+DEFAULT_SCENE_PATH = asset("pickplace.json")
 
 
 @dataclass(frozen=True)
@@ -96,7 +97,7 @@ class PickPlaceScene:
 
 def load_scene(path=None) -> PickPlaceScene:
     """Read the scene from JSON (default: the bundled ``assets/pickplace.json``)."""
-    data = json.loads((DEFAULT_SCENE_PATH if path is None else Path(path)).read_text())
+    data = read_json(DEFAULT_SCENE_PATH if path is None else Path(path), "pick-and-place scene")
     tray, plant, bin_ = data["tray"], data["plant"], data["bin"]
     arr = np.asarray
     return PickPlaceScene(

@@ -27,6 +27,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import io
+import importlib.util
 import os
 import queue
 import subprocess
@@ -242,7 +243,9 @@ def start_server(timeout: float = 30.0, port: int | None = None) -> MeshcatServe
     MeshcatServerError
         The process exited or stayed silent for ``timeout`` seconds.
     """
-    root = str(Path(__file__).resolve().parents[2])
+    # the child imports tutor from wherever this process found it (an installed wheel,
+    # an editable checkout or a notebook's sys.path), not from the repository's layout
+    root = str(Path(importlib.util.find_spec("tutor").origin).parent.parent)
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
     cmd = [sys.executable, "-u", "-m", "tutor.views.meshcat_server"]
