@@ -1,4 +1,4 @@
-"""Build ``tutor/assets/feasibility_map.npz``: where the Panda's tool can be in the pick-and-place scene.
+"""Build ``tutor/assets/feasibility_map.npz``: where the Panda's tool can be in the scene.
 
 The map is a voxel grid over the region the task uses (x -0.25 .. 0.90, y -0.70 .. 0.75,
 z -0.05 .. 0.65 m, 1 cm voxels; edit ``GRID`` to change it). A voxel centre is in X

@@ -29,8 +29,8 @@ import numpy as np
 
 from ..errors import InvalidDemoError, InvalidParameterError
 from ..fileio import read_json
-from ..resources import asset
 from ..framework.task import Task, Verdict
+from ..resources import asset
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
 from .paths import minimum_jerk_through
 

@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import atexit
 import contextlib
-import io
 import importlib.util
+import io
 import os
 import queue
 import subprocess
