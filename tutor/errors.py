@@ -17,6 +17,9 @@ __all__ = [
     "InvalidParameterError",
     "NotFittedError",
     "InvalidFileError",
+    "SaveError",
+    "SessionInUseError",
+    "WrongRunError",
 ]
 
 
@@ -50,3 +53,19 @@ class NotFittedError(TutorError, RuntimeError):
 
 class InvalidFileError(TutorError, ValueError):
     """A session or demonstration file is corrupt, truncated, of the wrong kind or hostile."""
+
+
+class SaveError(TutorError, OSError):
+    """A file could not be written (disk full, no permission, a folder that is a file).
+
+    Nothing in memory is lost: the caller keeps its state and may try again.
+    """
+
+
+class SessionInUseError(TutorError, RuntimeError):
+    """Another tutor or kernel is writing this session file (it holds the file's lock)."""
+
+
+class WrongRunError(InvalidFileError):
+    """A file holds a different run (another experiment, condition or trainee), or the run
+    it would change is finished."""
