@@ -225,3 +225,41 @@ def test_lab_listens_on_loopback_only(tmp_path: Path):
     finally:
         _stop(proc, timeout=max(5.0, deadline - time.monotonic()))
     assert proc.returncode is not None
+
+
+def test_paper_numbers_agree_with_their_copies():
+    """The set-up values the tasks, the teachers and the study hold are tutor.paper's."""
+    from tutor import paper
+    from tutor.study.cohort import EXPERIMENTS
+    from tutor.tasks.maze import load_layout
+    from tutor.tasks.maze_rules import RULE_RADIUS
+    from tutor.tasks.pickplace import load_scene
+    from tutor.teachers.maze import RATE_HZ
+
+    layout = load_layout()
+    for box, size in [
+        (layout.workspace, paper.MAZE_WORKSPACE_SIZE),
+        (layout.start_zone, paper.MAZE_START_ZONE_SIZE),
+    ]:
+        assert (box.x1 - box.x0, box.y1 - box.y0) == pytest.approx(size)
+    assert layout.target_diameter == pytest.approx(paper.MAZE_TARGET_DIAMETER)
+    assert layout.grid_shape == paper.MAZE_GRID_SHAPE
+    assert layout.n_components == paper.MAZE_N_COMPONENTS
+    assert RULE_RADIUS == paper.MAZE_RULE_RADIUS
+    assert RATE_HZ == paper.MAZE_TRACKER_HZ
+
+    scene = load_scene()
+    assert scene.rows * scene.cols == paper.PICKPLACE_N_PLANTS
+    assert len(scene.generalisation_indices) == paper.PICKPLACE_N_GENERALISATION_SAMPLES
+    assert scene.realisation_seconds == paper.PICKPLACE_REALISATION_SECONDS
+    assert scene.run_seconds == paper.PICKPLACE_RUN_SECONDS
+
+    assert EXPERIMENTS[1]["conditions"] == paper.MAZE_CONDITIONS
+    assert EXPERIMENTS[1]["n"] == paper.EXPERIMENT_1["n"] == paper.MAZE_N_TEACHERS
+    assert EXPERIMENTS[2]["conditions"] == paper.PICKPLACE_CONDITIONS
+    assert EXPERIMENTS[2]["n"] == paper.EXPERIMENT_2["n"] == paper.PICKPLACE_N_TEACHERS
+    assert EXPERIMENTS[2]["runs"] == paper.PICKPLACE_N_RUNS
+    # the paper's "about 180 %", "about 169 %" and "about 220 %"
+    assert paper.EXPERIMENT_1["relative"]["VF/NF"] == pytest.approx(1.8, abs=0.05)
+    assert paper.EXPERIMENT_2["relative"]["mean"] == pytest.approx(1.69, abs=0.01)
+    assert paper.EXPERIMENT_2["relative"]["third run"] == pytest.approx(2.2, abs=0.01)

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import paper, replication, stats
+from .. import paper
+from . import replication, stats
 from .cohort import CohortResult, run_experiment
 
 __all__ = [
