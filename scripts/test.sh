@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Set up .venv (see scripts/env.sh) and run the whole test suite:
-# ruff, then pytest over tests/ and every notebook under notebooks/ (via nbmake).
-# Extra arguments go to pytest. Exits non-zero if ruff or pytest fails.
+# ruff and lint-imports, then pytest over tests/ and every notebook under notebooks/ (via nbmake).
+# Extra arguments go to pytest. Exits non-zero if ruff, lint-imports or pytest fails.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -30,6 +30,9 @@ export MPLBACKEND=Agg
 
 ruff_status=0
 ruff check . || ruff_status=$?
+# the layers contract of pyproject.toml ([tool.importlinter])
+lint_status=0
+lint-imports --no-logo || lint_status=$?
 
 pytest_status=0
 python -m pytest tests --nbmake notebooks --nbmake-timeout=600 -p no:cacheprovider "$@" \
@@ -38,4 +41,7 @@ python -m pytest tests --nbmake notebooks --nbmake-timeout=600 -p no:cacheprovid
 if [[ $pytest_status -ne 0 ]]; then
     exit "$pytest_status"
 fi
-exit "$ruff_status"
+if [[ $ruff_status -ne 0 ]]; then
+    exit "$ruff_status"
+fi
+exit "$lint_status"

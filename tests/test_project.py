@@ -263,3 +263,20 @@ def test_paper_numbers_agree_with_their_copies():
     assert paper.EXPERIMENT_1["relative"]["VF/NF"] == pytest.approx(1.8, abs=0.05)
     assert paper.EXPERIMENT_2["relative"]["mean"] == pytest.approx(1.69, abs=0.01)
     assert paper.EXPERIMENT_2["relative"]["third run"] == pytest.approx(2.2, abs=0.01)
+
+
+def test_imports_keep_the_layers():
+    """lint-imports holds pyproject.toml's layers contract (CLI > study > ... > tpgmm)."""
+    lint_imports = Path(sys.executable).with_name("lint-imports")
+    assert lint_imports.exists(), "import-linter is a test dependency: pip install -e .[test]"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run(
+        [str(lint_imports), "--no-logo", "--no-cache"],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "1 kept, 0 broken" in proc.stdout
