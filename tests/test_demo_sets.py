@@ -110,7 +110,7 @@ def test_save_and_load_round_trip(tmp_path, suffix):
         ("a.json", '{"format": "lfd-tutor-demos", "demos": [[[0, 1]]]}', "3 numbers"),
         ("a.json", '{"format": "lfd-tutor-demos", "demos": [[[0, 1, "x"]]]}', "finite number"),
         ("a.json", '{"format": "lfd-tutor-demos", "demos": [[[0, 1, true]]]}', "finite number"),
-        ("a.json", '{"format": "lfd-tutor-demos", "demos": [[[0, 1, 1e999]]]}', "finite number"),
+        ("a.json", '{"format": "lfd-tutor-demos", "demos": [[[0, 1, 1e999]]]}', "too large"),
         ("a.json", '{"demos": []}', "not an lfd-tutor demonstration file"),
         ("a.json", '{"format": "lfd-tutor-demos", "demos": [[[0, 1, 2]', "not valid JSON"),
         ("a.csv", "t,x,y\n0,1,2\n", "header"),

@@ -8,13 +8,21 @@ JSON (``*.json``)::
      "demos": [[[t, x, y], [t, x, y], ...], ...],
      "conditions": [[...], null, ...]}
 
+``version`` may be left out (it is then 1); other versions are refused.
 ``conditions`` is optional: the test condition the teacher meant each demo for (for
 pick-and-place the chosen plant's grasp point), ``null`` where not recorded. It lets a
 session tell a demo to the wrong place from a demo to the right one.
 
-CSV (``*.csv``): a header line ``demo,t,x,y`` (further coordinate columns
-allowed), then one row per sample; rows with the same ``demo`` label form one
-demonstration, in the order the labels first appear.
+CSV (``*.csv``): a header line naming the columns, e.g. ``demo,t,x,y``, then one row
+per sample; rows with the same ``demo`` label form one demonstration, in the order the
+labels first appear. Commas separate the values; a file separated by ``;`` or tabs
+(as Excel writes in some languages) is read too, as long as its numbers use a decimal
+point. A UTF-8 byte-order mark is accepted.
+
+Columns are matched by name, in any order, in both formats: ``demo`` (CSV only), and
+:data:`KNOWN_COLUMNS` (``t`` time in s, required; ``x``, ``y``, ``z`` in m; ``g`` the
+hand, 0 open and 1 closed). A loaded set has them in the order :data:`KNOWN_COLUMNS`
+lists them, or in the order the caller asks for (``load_demos(path, columns=...)``).
 
 Values are checked here only for being a table of finite numbers; the task's
 ``preprocess`` checks the rest when a demo is added to a session.
@@ -25,19 +33,51 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 
-from .errors import InvalidFileError
-from .fileio import MAX_FILE_BYTES, atomic_write_text, read_json, write_json
+from .errors import InvalidDemoError, InvalidFileError, InvalidParameterError
+from .fileio import (
+    atomic_write_text,
+    check_file_name,
+    finite_number,
+    read_json,
+    read_text,
+    write_json,
+)
 from .resources import asset
 
-__all__ = ["DemoSet", "load_demos", "save_demos", "bundled_demos", "BUNDLED_DIR", "DEMOS_FORMAT"]
+__all__ = [
+    "DemoSet",
+    "load_demos",
+    "save_demos",
+    "bundled_demos",
+    "bundled_names",
+    "BUNDLED_DIR",
+    "DEMOS_FORMAT",
+    "SUPPORTED_VERSIONS",
+    "KNOWN_COLUMNS",
+    "LABEL_COLUMN",
+]
 
 DEMOS_FORMAT = "lfd-tutor-demos"
+#: the versions of the JSON format this tutor reads (a file without one is version 1)
+SUPPORTED_VERSIONS = (1,)
+#: the columns a demonstration may have, in the order a loaded set keeps them
+KNOWN_COLUMNS = ("t", "x", "y", "z", "g")
+#: the CSV column telling which demonstration a row belongs to
+LABEL_COLUMN = "demo"
 #: where the demonstration sets shipped with the tutor live
 BUNDLED_DIR = asset("demos")
+
+_SEPARATORS = {",": "','", ";": "';'", "\t": "tab"}
+#: a plain decimal number: digits with an optional decimal point and exponent
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+#: a number written with a decimal comma (optionally with '.' or ' ' grouping)
+_DECIMAL_COMMA = re.compile(r"[+-]?[0-9][0-9. ]*,[0-9]+(?:[eE][+-]?[0-9]+)?")
+_NOT_FINITE = {"nan", "inf", "infinity"}
 
 
 class DemoSet:
@@ -77,64 +117,183 @@ class DemoSet:
         return self.demos[i]
 
 
+# --------------------------------------------------------------------- columns
+
+
+def _known_list() -> str:
+    return ", ".join((LABEL_COLUMN, *KNOWN_COLUMNS))
+
+
+def check_columns(names, where: str, error=InvalidFileError) -> list[str]:
+    """Column names checked and normalised (stripped, lower case).
+
+    Each must be one of :data:`KNOWN_COLUMNS`, none twice, and ``t`` among them.
+
+    Raises
+    ------
+    InvalidFileError (or ``error``)
+        Naming the unknown, repeated or missing column and listing the known ones.
+    """
+    if isinstance(names, str):
+        names = list(names)
+    try:
+        names = list(names)
+    except TypeError:
+        raise error(f"{where}: the columns must be a list of names such as t, x, y") from None
+    if not all(isinstance(n, str) for n in names):
+        raise error(f"{where}: the columns must be a list of names such as t, x, y")
+    clean = [n.strip().lower() for n in names]
+    for name in clean:
+        if name not in KNOWN_COLUMNS:
+            raise error(f"{where}: unknown column {name!r}; the known columns are {_known_list()}")
+        if clean.count(name) > 1:
+            raise error(f"{where}: the column {name!r} appears twice; keep one")
+    if "t" not in clean:
+        raise error(f"{where}: there is no 't' column (the time in s); every demo needs one")
+    return clean
+
+
+def _arrangement(found: list[str], expected, where: str) -> tuple[list[int], list[str]]:
+    """Where each column of the result is in ``found``, and the result's names."""
+    if expected is None:
+        names = [c for c in KNOWN_COLUMNS if c in found]
+    else:
+        names = list(expected)
+        missing = [c for c in names if c not in found]
+        if missing:
+            raise InvalidFileError(
+                f"{where} has no {', '.join(repr(c) for c in missing)} column; this task's "
+                f"demonstrations have the columns {', '.join(names)} (it has {', '.join(found)})"
+            )
+        extra = [c for c in found if c not in names]
+        if extra:
+            raise InvalidFileError(
+                f"{where} has the column(s) {', '.join(repr(c) for c in extra)}, which this "
+                f"task does not use: its demonstrations have the columns {', '.join(names)}; "
+                "is it a file for another task?"
+            )
+    return [found.index(c) for c in names], names
+
+
+# --------------------------------------------------------------------- saving
+
+
 def save_demos(
     path, demos, task=None, columns=("t", "x", "y"), description="", conditions=None
 ) -> Path:
     """Write demos atomically as JSON or CSV (chosen by the file's suffix).
 
     ``conditions`` (one per demo, or None) is kept in JSON only.
+
+    Raises
+    ------
+    InvalidParameterError
+        Unknown or repeated column names.
+    InvalidDemoError
+        A demo that is not a non-empty table of finite numbers with one value per column.
+    SaveError
+        The file could not be written (see :func:`tutor.fileio.atomic_write_text`).
     """
     path = Path(path)
-    demos = [np.asarray(d, dtype=float) for d in demos]
+    columns = check_columns(columns, "save_demos", InvalidParameterError)
+    demos = [_demo_to_save(d, len(columns), i) for i, d in enumerate(demos, start=1)]
     if path.suffix.lower() == ".csv":
         buf = io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")
-        writer.writerow(["demo", *columns])
+        writer.writerow([LABEL_COLUMN, *columns])
         for i, demo in enumerate(demos, start=1):
             writer.writerows([i, *map(repr, row.tolist())] for row in demo)
         return atomic_write_text(path, buf.getvalue())
-    return write_json(
-        path,
-        {
-            "format": DEMOS_FORMAT,
-            "version": 1,
-            "task": task,
-            "columns": list(columns),
-            "description": description,
-            "demos": [d.tolist() for d in demos],
-            **(
-                {}
-                if conditions is None
-                else {
-                    "conditions": [
-                        None if c is None else np.asarray(c, float).tolist() for c in conditions
-                    ]
-                }
-            ),
-        },
-    )
+    record = {
+        "format": DEMOS_FORMAT,
+        "version": SUPPORTED_VERSIONS[-1],
+        "task": task,
+        "columns": columns,
+        "description": description,
+        "demos": [d.tolist() for d in demos],
+    }
+    if conditions is not None:
+        record["conditions"] = [
+            None if c is None else np.asarray(c, float).tolist() for c in conditions
+        ]
+    return write_json(path, record)
 
 
-def load_demos(path) -> DemoSet:
-    """Read demos written by :func:`save_demos` (or by hand in the same formats)."""
+def _demo_to_save(demo, n_columns: int, number: int) -> np.ndarray:
+    try:
+        array = np.asarray(demo, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidDemoError(f"demo {number} is not a table of numbers ({exc})") from exc
+    if array.ndim != 2 or array.shape[1] != n_columns or array.shape[0] == 0:
+        raise InvalidDemoError(
+            f"demo {number} has shape {array.shape}; it must have at least one sample of "
+            f"{n_columns} values (one per column)"
+        )
+    if not np.isfinite(array).all():
+        raise InvalidDemoError(f"demo {number} holds NaN or inf; only finite numbers are saved")
+    return array
+
+
+# --------------------------------------------------------------------- loading
+
+
+def load_demos(path, columns=None) -> DemoSet:
+    """Read demos written by :func:`save_demos` (or by hand in the same formats).
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.json`` or ``.csv`` file.
+    columns : sequence of str, optional
+        The columns the task expects, e.g. ``("t", "x", "y")``. The demos come back in
+        exactly this order; a file lacking one of them, or having others, is refused.
+        By default the file's columns are kept, in the order of :data:`KNOWN_COLUMNS`.
+
+    Raises
+    ------
+    InvalidFileError
+        Saying what is wrong with the file and how to fix it.
+    InvalidParameterError
+        ``columns`` names an unknown column.
+    """
+    problem = check_file_name(path)
+    if problem is not None:
+        raise InvalidFileError(f"cannot open the demonstration file: {problem}")
     path = Path(path)
+    if columns is not None:
+        columns = check_columns(columns, "load_demos(columns=...)", InvalidParameterError)
     if path.suffix.lower() == ".csv":
-        return _load_csv(path)
+        return _load_csv(path, columns)
     if path.suffix.lower() != ".json":
         raise InvalidFileError(f"{path.name}: demonstration files must end in .json or .csv")
+    return _load_json(path, columns)
+
+
+def _load_json(path: Path, expected) -> DemoSet:
     data = read_json(path, "demonstration file")
     if not isinstance(data, dict) or data.get("format") != DEMOS_FORMAT:
         raise InvalidFileError(
             f"{path.name} is not an lfd-tutor demonstration file "
             f'(it needs "format": "{DEMOS_FORMAT}")'
         )
-    columns = data.get("columns", ["t", "x", "y"])
-    if not (isinstance(columns, list) and all(isinstance(c, str) for c in columns)):
-        raise InvalidFileError(f"{path.name}: 'columns' must be a list of names")
+    version = data.get("version", 1)
+    if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
+        raise InvalidFileError(
+            f"{path.name} has version {version!r}, which this tutor cannot read; it reads "
+            f"version {', '.join(map(str, SUPPORTED_VERSIONS))} (a whole number). Save the "
+            "demos again with this tutor, or update the tutor"
+        )
+    listed = data.get("columns", ["t", "x", "y"])
+    if not isinstance(listed, list):
+        raise InvalidFileError(f"{path.name}: 'columns' must be a list of names such as t, x, y")
+    found = check_columns(listed, f"{path.name}, 'columns'")
+    order, names = _arrangement(found, expected, path.name)
     raw = data.get("demos")
     if not isinstance(raw, list):
         raise InvalidFileError(f"{path.name}: 'demos' must be a list of demonstrations")
-    demos = [_table(d, len(columns), f"{path.name}, demo {i + 1}") for i, d in enumerate(raw)]
+    demos = [
+        _table(d, len(found), f"{path.name}, demo {i + 1}")[:, order] for i, d in enumerate(raw)
+    ]
     task = data.get("task")
     conditions = data.get("conditions")
     if conditions is not None:
@@ -153,7 +312,7 @@ def load_demos(path) -> DemoSet:
         ]
     return DemoSet(
         demos,
-        columns,
+        names,
         task if isinstance(task, str) else None,
         str(data.get("description", "")),
         conditions,
@@ -165,51 +324,123 @@ def _table(rows, n_columns: int, where: str) -> np.ndarray:
         isinstance(r, list) and len(r) == n_columns for r in rows
     ):
         raise InvalidFileError(f"{where}: every sample must be a list of {n_columns} numbers")
-    if not all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-        for r in rows
-        for v in r
-    ):
-        raise InvalidFileError(f"{where}: holds something that is not a finite number")
+    for k, row in enumerate(rows, start=1):
+        for value in row:
+            if not finite_number(value):
+                shown = str(value).lower() if isinstance(value, bool) else repr(value)[:40]
+                raise InvalidFileError(
+                    f"{where}, sample {k}: holds {shown}, something that is not a finite "
+                    "number; write a plain number there"
+                )
     return np.array(rows, dtype=float).reshape(len(rows), n_columns)
 
 
-def _load_csv(path: Path) -> DemoSet:
-    try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise InvalidFileError(f"{path.name} is too large to be a demonstration file")
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InvalidFileError(f"cannot read {path}: {exc}") from exc
-    reader = csv.reader(io.StringIO(text))
-    header = next(reader, None)
-    if not header or header[0].strip().lower() != "demo" or len(header) < 3:
-        raise InvalidFileError(f"{path.name}: the first line must be a header like 'demo,t,x,y'")
-    columns = [h.strip() for h in header[1:]]
-    groups: dict[str, list[list[float]]] = {}
-    for line_no, row in enumerate(reader, start=2):
-        if not row or all(not c.strip() for c in row):
-            continue
-        if len(row) != len(header):
-            raise InvalidFileError(
-                f"{path.name}, line {line_no}: {len(row)} values but the header has {len(header)}"
-            )
+def _separator(line: str) -> str:
+    """The separator that splits the header line into the most fields (',' on a tie)."""
+    best, most = ",", 0
+    for sep in _SEPARATORS:
         try:
-            values = [float(c) for c in row[1:]]
-        except ValueError as exc:
-            raise InvalidFileError(f"{path.name}, line {line_no}: {exc}") from exc
-        if not all(math.isfinite(v) for v in values):
-            raise InvalidFileError(f"{path.name}, line {line_no}: NaN or inf is not allowed")
-        groups.setdefault(row[0].strip(), []).append(values)
+            fields = next(csv.reader([line], delimiter=sep), [])
+        except csv.Error:
+            continue
+        if len(fields) > most:
+            best, most = sep, len(fields)
+    return best
+
+
+def _csv_number(cell: str, where: str, sep: str) -> float:
+    text = cell.strip()
+    if _NUMBER.fullmatch(text):
+        value = float(text)
+        if not math.isfinite(value):
+            raise InvalidFileError(
+                f"{where}: the number {text[:40]} is too large for a floating-point number "
+                "(the largest is about 1.8e308): fix or remove it"
+            )
+        return value
+    if text.lower().lstrip("+-") in _NOT_FINITE:
+        raise InvalidFileError(f"{where}: NaN or inf is not allowed ({text!r}); write a number")
+    if _DECIMAL_COMMA.fullmatch(text):
+        raise InvalidFileError(
+            f"{where}: {text!r} has a decimal comma, and the values are separated by "
+            f"{_SEPARATORS[sep]}. Re-export the file with a decimal point (e.g. 0.5): in Excel "
+            "or LibreOffice set the decimal separator to '.' (or the language to English), "
+            "or save as 'CSV (comma delimited)'"
+        )
+    if text.lower().endswith("j"):
+        raise InvalidFileError(f"{where}: {text!r} is a complex number; write a real number")
+    raise InvalidFileError(f"{where}: {text[:40]!r} is not a number; write a plain number")
+
+
+def _load_csv(path: Path, expected) -> DemoSet:
+    text = read_text(path, "demonstration file")
+    header_line = re.split(r"\r\n|\r|\n", text, maxsplit=1)[0]
+    sep = _separator(header_line)
+    where = path.name if sep == "," else f"{path.name} (values separated by {_SEPARATORS[sep]})"
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=sep)
+    try:
+        header = next(reader, None)
+    except csv.Error as exc:
+        raise InvalidFileError(f"{where}, line 1: {exc}") from exc
+    if not header or len(header) < 3:
+        raise InvalidFileError(
+            f"{where}: the first line must be a header naming the columns, like "
+            "'demo,t,x,y' (separated by commas, ';' or tabs)"
+        )
+    names = [h.strip().lower() for h in header]
+    if names.count(LABEL_COLUMN) != 1:
+        raise InvalidFileError(
+            f"{where}: the header {','.join(header)[:80]!r} needs one 'demo' column telling "
+            f"which demonstration each row belongs to (known columns: {_known_list()})"
+        )
+    label_at = names.index(LABEL_COLUMN)
+    value_at = [k for k in range(len(names)) if k != label_at]
+    found = check_columns([names[k] for k in value_at], f"{where}, header")
+    order, columns = _arrangement(found, expected, where)
+    groups: dict[str, list[list[float]]] = {}
+    try:
+        for row in reader:
+            line_no = reader.line_num
+            if not row or all(not c.strip() for c in row):
+                continue
+            if len(row) != len(header):
+                raise InvalidFileError(
+                    f"{where}, line {line_no}: {len(row)} values but the header has {len(header)}"
+                )
+            label = row[label_at].strip()
+            if not label:
+                raise InvalidFileError(f"{where}, line {line_no}: the 'demo' label is empty")
+            at = f"{where}, line {line_no}"
+            groups.setdefault(label, []).append([_csv_number(row[k], at, sep) for k in value_at])
+    except csv.Error as exc:
+        raise InvalidFileError(f"{where}, line {reader.line_num}: {exc}") from exc
     if not groups:
-        raise InvalidFileError(f"{path.name} holds no samples")
-    return DemoSet([np.array(g) for g in groups.values()], columns)
+        raise InvalidFileError(f"{where} holds no samples")
+    return DemoSet([np.array(g)[:, order] for g in groups.values()], columns)
 
 
-def bundled_demos(name: str) -> DemoSet:
-    """A demonstration set shipped in ``assets/demos`` (e.g. ``"maze_good"``)."""
-    path = BUNDLED_DIR / f"{name}.json"
-    if not path.exists():
-        known = ", ".join(sorted(p.stem for p in BUNDLED_DIR.glob("*.json")))
-        raise InvalidFileError(f"no bundled demonstration set {name!r}; choose one of: {known}")
-    return load_demos(path)
+# --------------------------------------------------------------------- bundled sets
+
+
+def bundled_names() -> list[str]:
+    """The names of the demonstration sets shipped with the tutor."""
+    return sorted(p.stem for p in BUNDLED_DIR.glob("*.json"))
+
+
+def bundled_demos(name: str, columns=None) -> DemoSet:
+    """A demonstration set shipped in ``assets/demos`` (e.g. ``"maze_good"``).
+
+    Only the names :func:`bundled_names` lists are accepted (no paths).
+
+    Raises
+    ------
+    InvalidFileError
+        ``name`` is not one of them; the message lists them.
+    """
+    known = bundled_names()
+    if not isinstance(name, str) or name not in known:
+        raise InvalidFileError(
+            f"no bundled demonstration set {name!r}; give one of these names (without a "
+            f"folder or .json): {', '.join(known)}"
+        )
+    return load_demos(BUNDLED_DIR / f"{name}.json", columns)

@@ -1,79 +1,427 @@
-"""Safe reading and writing of the tutor's JSON files.
+"""Safe reading and writing of the tutor's files.
 
-Writes are atomic (a temporary file in the same folder, flushed to disk, then
-renamed over the target), so a crash never leaves a half-written session.
-Reads only ever parse JSON (never pickle) and turn every failure into an
+Reads open the file without blocking, check that it is a regular file no larger
+than :data:`MAX_FILE_BYTES` before reading a byte of it (a FIFO, ``/dev/zero`` or a
+folder is refused, never read), decode UTF-8 (a leading byte-order mark is
+accepted) and parse only JSON (never pickle). Every failure becomes an
 :class:`~tutor.errors.InvalidFileError` that says what is wrong.
+
+Writes are atomic: a temporary file in the target's folder, flushed to disk,
+renamed over the target, then the folder itself flushed. Every failure (disk
+full, no permission, read-only disk, a path through a file, a name too long)
+becomes a :class:`~tutor.errors.SaveError` in plain words; the target is left as
+it was and no temporary file stays behind.
 """
 
 from __future__ import annotations
 
+import errno
+import hashlib
 import json
 import math
 import os
+import stat
 import tempfile
+import time
 from pathlib import Path
 
-from .errors import InvalidFileError
+from .errors import InvalidFileError, SaveError
 
-__all__ = ["atomic_write_text", "write_json", "read_json", "MAX_FILE_BYTES"]
+__all__ = [
+    "atomic_write_text",
+    "write_json",
+    "read_json",
+    "read_text",
+    "read_bytes",
+    "check_file_name",
+    "save_error",
+    "finite_number",
+    "MAX_FILE_BYTES",
+    "MAX_NAME_BYTES",
+    "STALE_TEMP_SECONDS",
+]
 
 #: files larger than this are refused (a session of 1000 demos is about 10 MB)
 MAX_FILE_BYTES = 50 * 1024 * 1024
+#: the longest file or folder name (in UTF-8 bytes) common file systems accept
+MAX_NAME_BYTES = 255
+#: temporary files of a save older than this were left by a killed process
+STALE_TEMP_SECONDS = 60.0
+
+_READ_FLAGS = (
+    os.O_RDONLY
+    | getattr(os, "O_NONBLOCK", 0)  # a FIFO opens at once instead of waiting for a writer
+    | getattr(os, "O_NOCTTY", 0)  # a terminal device never becomes our terminal
+    | getattr(os, "O_BINARY", 0)
+)
+_CHUNK = 1024 * 1024
 
 
-def atomic_write_text(path, text: str) -> Path:
-    """Write ``text`` to ``path`` atomically; returns the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+# --------------------------------------------------------------------- names
+
+
+def check_file_name(path) -> str | None:
+    """What is wrong with ``path`` as a file name, or None if nothing is.
+
+    Refused: something that is not a path, a NUL character, and a file or folder
+    name longer than :data:`MAX_NAME_BYTES` bytes in UTF-8.
+    """
+    if not isinstance(path, (str, os.PathLike)):
+        return f"{path!r} is not a file path"
+    text = os.fspath(path)
+    if not isinstance(text, str):
+        return f"{path!r} is not a file path (give it as text)"
+    if "\x00" in text:
+        return "the name contains a NUL character, which no file name can hold"
+    for part in Path(text).parts:
+        size = len(part.encode("utf-8", "surrogateescape"))
+        if size > MAX_NAME_BYTES:
+            return (
+                f"the name {part[:40]!r}... is {size} bytes long, more than the "
+                f"{MAX_NAME_BYTES} a file name can have: use a shorter name"
+            )
+    return None
+
+
+def _shown(path) -> str:
+    """``path`` as text for a message: NUL shown as ``\\0``, cut to 120 characters."""
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+        text = os.fspath(path)
+    except TypeError:
+        text = repr(path)
+    if not isinstance(text, str):
+        text = repr(text)
+    text = text.replace("\x00", "\\0")
+    return text if len(text) <= 120 else f"{text[:60]}...{text[-57:]}"
 
 
-def write_json(path, data) -> Path:
-    """Atomically write ``data`` as JSON (NaN and inf are refused)."""
-    return atomic_write_text(path, json.dumps(data, allow_nan=False, separators=(",", ":")))
+# --------------------------------------------------------------------- reading
+
+
+def _open_error(path, what: str, exc: OSError) -> InvalidFileError:
+    where = _shown(path)
+    reasons = {
+        errno.ENOENT: f"{what} {where} does not exist: check the name and the folder",
+        errno.EISDIR: f"{what} {where} is a folder, not a file: give the file inside it",
+        errno.ENOTDIR: f"{what} {where}: part of the path is a file, not a folder",
+        errno.EACCES: f"{what} {where} cannot be read (no permission): check its permissions",
+        errno.EPERM: f"{what} {where} cannot be read (not permitted): check its permissions",
+        errno.ENAMETOOLONG: f"{what} {where}: the path is too long; move the file higher up",
+        errno.ELOOP: f"{what} {where}: the path runs through a loop of symbolic links",
+    }
+    reason = reasons.get(exc.errno)
+    if reason is None:
+        reason = f"cannot open {what} {where}: {exc.strerror or exc}"
+    return InvalidFileError(reason)
+
+
+def _kind(mode: int) -> str:
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if stat.S_ISFIFO(mode):
+        return "a pipe (FIFO)"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def _too_large(path, what: str, size: int) -> InvalidFileError:
+    return InvalidFileError(
+        f"{what} {_shown(path)} is {size / 1e6:.0f} MB or more, larger than the "
+        f"{MAX_FILE_BYTES / 1e6:.0f} MB a tutor file can be; is it the right file?"
+    )
+
+
+def read_bytes(path, what: str = "file") -> bytes:
+    """The bytes of a regular file of at most :data:`MAX_FILE_BYTES`.
+
+    The file is opened without blocking and checked with ``fstat`` before anything
+    is read: a folder, pipe, device or socket is refused unread, and so is a file
+    that is too large. At most ``MAX_FILE_BYTES`` are read even if the file grows
+    meanwhile (then it is refused as too large).
+
+    Raises
+    ------
+    InvalidFileError
+        With what is wrong (missing, a folder, not a regular file, too large,
+        unreadable, a bad name).
+    """
+    problem = check_file_name(path)
+    if problem is not None:
+        raise InvalidFileError(f"cannot open {what} {_shown(path)}: {problem}")
+    try:
+        fd = os.open(path, _READ_FLAGS)
+    except OSError as exc:
+        raise _open_error(path, what, exc) from exc
+    except ValueError as exc:  # a name the platform refuses outright
+        raise InvalidFileError(f"cannot open {what} {_shown(path)}: {exc}") from exc
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise InvalidFileError(
+                f"{what} {_shown(path)} is {_kind(info.st_mode)}, not a regular file: "
+                "give the path of a saved file"
+            )
+        if info.st_size > MAX_FILE_BYTES:
+            raise _too_large(path, what, info.st_size)
+        chunks, total = [], 0
+        while total <= MAX_FILE_BYTES:
+            chunk = os.read(fd, min(_CHUNK, MAX_FILE_BYTES + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+        if total > MAX_FILE_BYTES:
+            raise _too_large(path, what, total)
+        return b"".join(chunks)
+    except OSError as exc:
+        raise InvalidFileError(
+            f"{what} {_shown(path)} could not be read: {exc.strerror or exc}"
+        ) from exc
+    finally:
+        os.close(fd)
+
+
+def read_text(path, what: str = "file") -> str:
+    """A UTF-8 text file (a leading byte-order mark is dropped), checked as :func:`read_bytes`."""
+    data = read_bytes(path, what)
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InvalidFileError(
+            f"{what} {_shown(path)} is not UTF-8 text (byte {exc.start} is not): "
+            "is it the right file? Save it as UTF-8 text"
+        ) from exc
+
+
+class _BadNumber(ValueError):
+    """A JSON number the tutor refuses (raised from the parser's hooks)."""
 
 
 def _refuse_constant(name):
-    raise ValueError(f"{name} is not allowed")
+    raise _BadNumber(f"{name} is not allowed (write a finite number, or leave the entry out)")
+
+
+def _parse_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise _BadNumber(
+            f"the number {text[:40]} is too large for a floating-point number (the largest "
+            "is about 1.8e308): fix or remove it"
+        )
+    return value
+
+
+def _parse_int(text: str) -> int:
+    try:
+        value = int(text)
+        float(value)
+    except (OverflowError, ValueError) as exc:
+        raise _BadNumber(
+            f"the integer {text[:40]}{'...' if len(text) > 40 else ''} ({len(text)} digits) is "
+            "too large for a floating-point number (the largest is about 1.8e308): fix or remove it"
+        ) from exc
+    return value
 
 
 def read_json(path, what: str = "file"):
-    """Parse a JSON file, with a clear :class:`InvalidFileError` for any problem."""
-    path = Path(path)
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise InvalidFileError(f"cannot open {what} {path}: {exc.strerror or exc}") from exc
-    if size > MAX_FILE_BYTES:
-        raise InvalidFileError(
-            f"{what} {path} is {size / 1e6:.0f} MB, more than the {MAX_FILE_BYTES / 1e6:.0f} MB "
-            "a tutor file can be; is it the right file?"
-        )
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InvalidFileError(f"{what} {path} is not a readable UTF-8 text file ({exc})") from exc
+    """Parse a JSON file, with a clear :class:`InvalidFileError` for any problem.
+
+    Besides what :func:`read_text` refuses: an empty file, invalid JSON, NaN and
+    Infinity, numbers too large for a float (``1e400``, a 400-digit integer) and
+    nesting too deep to parse.
+    """
+    text = read_text(path, what)
     if not text.strip():
-        raise InvalidFileError(f"{what} {path} is empty")
+        raise InvalidFileError(f"{what} {_shown(path)} is empty: is it the right file?")
     try:
-        return json.loads(text, parse_constant=_refuse_constant)
-    except (ValueError, RecursionError) as exc:
+        return json.loads(
+            text,
+            parse_constant=_refuse_constant,
+            parse_float=_parse_float,
+            parse_int=_parse_int,
+        )
+    except _BadNumber as exc:
+        raise InvalidFileError(f"{what} {_shown(path)}: {exc}") from exc
+    except RecursionError as exc:
         raise InvalidFileError(
-            f"{what} {path} is not valid JSON (it may be truncated or corrupt): {exc}"
+            f"{what} {_shown(path)} is nested too deeply to read: is it the right file?"
+        ) from exc
+    except ValueError as exc:
+        raise InvalidFileError(
+            f"{what} {_shown(path)} is not valid JSON (it may be truncated or corrupt): {exc}"
         ) from exc
 
 
 def finite_number(value) -> bool:
     """True for an int or float that is finite (bool excluded)."""
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:  # an int too large for a float
+        return False
+
+
+# --------------------------------------------------------------------- writing
+
+
+def save_error(path, exc: OSError) -> SaveError:
+    """A :class:`SaveError` saying in plain words why ``path`` could not be written."""
+    where = _shown(path)
+    folder = _shown(Path(path).parent) if check_file_name(path) is None else "its folder"
+    reasons = {
+        errno.ENOSPC: "the disk is full: free some space, then save again",
+        errno.EDQUOT: "your disk quota is used up: free some space, then save again",
+        errno.EACCES: f"there is no permission to write in {folder}: save somewhere you may "
+        "write, or ask for write access",
+        errno.EPERM: f"writing in {folder} is not permitted: save somewhere you may write",
+        errno.EROFS: f"{folder} is on a read-only disk: save somewhere else",
+        errno.ENOTDIR: "part of the path is a file, not a folder: choose another folder",
+        errno.EEXIST: "part of the path is a file, not a folder: choose another folder",
+        errno.EISDIR: "that is a folder: give a file name inside it",
+        errno.ENAMETOOLONG: "the name or the path is too long: choose a shorter one",
+        errno.EIO: "the disk reported an error: check it, or save somewhere else",
+    }
+    reason = reasons.get(exc.errno) or f"{exc.strerror or exc}: try again, or save somewhere else"
+    return SaveError(f"could not save {where}: {reason}. Nothing was changed on disk.")
+
+
+def _temp_prefix(path: Path) -> str:
+    """The prefix of ``path``'s temporary files, short enough for any name."""
+    name = path.name
+    if len(name.encode("utf-8", "surrogateescape")) <= 200:
+        return f".{name}."
+    digest = hashlib.sha1(name.encode("utf-8", "surrogateescape")).hexdigest()[:12]
+    short = name
+    while len(short.encode("utf-8", "surrogateescape")) > 180:
+        short = short[:-1]
+    return f".{short}~{digest}."
+
+
+def _remove_stale_temps(path: Path, prefix: str) -> None:
+    """Remove temporary files of ``path`` left by a process killed while saving."""
+    now = time.time()
+    try:
+        entries = list(os.scandir(path.parent))
+    except OSError:
+        return
+    for entry in entries:
+        if not (entry.name.startswith(prefix) and entry.name.endswith(".tmp")):
+            continue
+        try:
+            if entry.is_file(follow_symlinks=False) and (
+                now - entry.stat(follow_symlinks=False).st_mtime > STALE_TEMP_SECONDS
+            ):
+                os.unlink(entry.path)
+        except OSError:
+            pass  # another process may be removing it too
+
+
+#: errors meaning "this platform or file system cannot flush a folder"
+_NO_DIR_FSYNC = {errno.EINVAL, errno.EBADF, errno.ENOTSUP, errno.EACCES, errno.EPERM, errno.EISDIR}
+
+
+def _fsync_folder(path: Path) -> None:
+    """Flush the folder entry of ``path`` (just renamed) to disk, where the platform can.
+
+    Raises
+    ------
+    SaveError
+        If the disk reports an error (the file was written, but may not survive a
+        power cut).
+    """
+    if os.name == "nt":  # Windows cannot open a folder as a file
+        return
+    try:
+        fd = os.open(path.parent, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError as exc:
+        if exc.errno not in _NO_DIR_FSYNC:
+            raise SaveError(
+                f"{path} was written, but the disk reported an error when asked to keep it "
+                f"({exc.strerror or exc}): check the disk, and save again"
+            ) from exc
+    finally:
+        os.close(fd)
+
+
+def atomic_write_text(path, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically as UTF-8; returns the path.
+
+    Missing folders are made. An existing target keeps its permissions.
+
+    Raises
+    ------
+    SaveError
+        In plain words (disk full, no permission, read-only disk, a path through a
+        file, a name too long); the target is untouched and no temporary file is
+        left.
+    """
+    problem = check_file_name(path)
+    if problem is not None:
+        raise SaveError(f"could not save {_shown(path)}: {problem}. Nothing was changed on disk.")
+    path = Path(path)
+    if path.name in ("", ".", ".."):
+        raise SaveError(
+            f"could not save {path}: that is a folder, not a file name: give a file name "
+            "inside it. Nothing was changed on disk."
+        )
+    try:
+        data = text.encode("utf-8")
+    except UnicodeEncodeError as exc:
+        raise SaveError(
+            f"could not save {path}: the text holds a character that is not valid Unicode "
+            f"(position {exc.start}). Nothing was changed on disk."
+        ) from exc
+    prefix = _temp_prefix(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _remove_stale_temps(path, prefix)
+        fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=".tmp", dir=path.parent)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                try:
+                    os.fchmod(fh.fileno(), stat.S_IMODE(os.stat(path).st_mode))
+                except (OSError, AttributeError):
+                    pass  # a new file, or a platform without fchmod: default permissions
+                fh.write(data)
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.replace(tmp, path)
+        except BaseException:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+            raise
+        _fsync_folder(path)
+    except SaveError:
+        raise
+    except OSError as exc:
+        raise save_error(path, exc) from exc
+    return path
+
+
+def write_json(path, data) -> Path:
+    """Atomically write ``data`` as JSON (NaN and inf are refused).
+
+    Raises
+    ------
+    SaveError
+        If ``data`` cannot be written as JSON (NaN, inf, an object JSON does not
+        know), or as :func:`atomic_write_text`.
+    """
+    try:
+        text = json.dumps(data, allow_nan=False, separators=(",", ":"))
+    except (ValueError, TypeError, RecursionError) as exc:
+        raise SaveError(
+            f"could not save {_shown(path)}: the data cannot be written as JSON ({exc}). "
+            "Nothing was changed on disk."
+        ) from exc
+    return atomic_write_text(path, text)
