@@ -48,6 +48,15 @@ def test_scene_matches_the_paper(task):
     assert task.start[2] > 0.3  # the start pose is well above the table
 
 
+def test_start_is_the_tool_at_the_start_configuration(task):
+    from tutor.robot import get_arm
+
+    # the Panda's "ready" pose (tests/test_robot.py checks the same numbers)
+    np.testing.assert_allclose(task.start, [0.30702, 0.0, 0.48687], atol=1e-5)
+    p, _ = get_arm().fk(task.scene.start_configuration)
+    np.testing.assert_array_equal(task.start, p)
+
+
 def test_a_correct_carry_passes(task):
     ctx = {"delta_g": 0.01, "delta_r": 0.01}
     v = task.judge(carry(task, 5)[None], task.conditions[[5]], ctx)

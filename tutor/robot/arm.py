@@ -219,6 +219,57 @@ class Arm:
         M = pin.updateFramePlacement(self.model, self.data, self.frame_id)
         return M.translation.copy(), M.rotation.copy()
 
+    def visual_placements(self, qs, visual_model=None) -> np.ndarray:
+        """Placement of every visual geometry (the meshes a viewer draws) at each ``q``.
+
+        Parameters
+        ----------
+        qs : array_like (T, nq) or (nq,)
+            Configurations.
+        visual_model : pinocchio.GeometryModel, optional
+            The geometries to place (default: the robot's own visual model from
+            :func:`load_robot`, in its order, ``visual_model.geometryObjects``).
+
+        Returns
+        -------
+        ndarray (T, G, 4, 4), or (G, 4, 4) for one configuration
+            Homogeneous transforms in the base frame, G = ``visual_model.ngeoms``.
+        """
+        pin = self._pin
+        Q = self._configurations(qs)
+        vmodel = load_robot(self.robot_name).visual_model if visual_model is None else visual_model
+        if not hasattr(vmodel, "geometryObjects"):
+            raise InvalidParameterError(
+                f"visual_model must be a pinocchio GeometryModel, got {type(vmodel).__name__}"
+            )
+        vdata = vmodel.createData()
+        model, data = self.model, self.data
+        out = np.empty((len(Q), vmodel.ngeoms, 4, 4))
+        for t, q in enumerate(Q):
+            pin.forwardKinematics(model, data, q)
+            pin.updateGeometryPlacements(model, data, vmodel, vdata)
+            for g, M in enumerate(vdata.oMg):
+                out[t, g] = M.homogeneous
+        return out[0] if np.ndim(qs) == 1 else out
+
+    def _configurations(self, qs) -> np.ndarray:
+        """``qs`` as finite configurations (T, nq), T >= 1 (one row for a single q)."""
+        try:
+            Q = np.asarray(qs, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InvalidParameterError(
+                f"configurations must be numbers of shape (T, {self.nq})"
+            ) from exc
+        if Q.ndim == 1:
+            Q = Q[None]
+        if Q.ndim != 2 or Q.shape[1] != self.nq or len(Q) < 1:
+            raise InvalidParameterError(
+                f"configurations must have shape (T, {self.nq}) or ({self.nq},), got {Q.shape}"
+            )
+        if not np.all(np.isfinite(Q)):
+            raise InvalidParameterError("configurations must be finite (no NaN or inf)")
+        return Q
+
     def ik(
         self,
         position,

@@ -140,15 +140,11 @@ def _first(mask: np.ndarray) -> np.ndarray:
 
 
 def start_position(scene: PickPlaceScene) -> np.ndarray:
-    """The tool centre point at the start configuration (forward kinematics), shape (3,)."""
-    import pinocchio as pin
+    """The tool centre point at the start configuration (:meth:`Arm.fk`), shape (3,)."""
+    from ..robot import get_arm, scene_obstacles
 
-    from ..robot import load_robot
-
-    robot = load_robot(scene.robot)
-    data = robot.model.createData()
-    pin.framesForwardKinematics(robot.model, data, scene.start_configuration)
-    return data.oMf[robot.model.getFrameId(scene.tool_frame)].translation.copy()
+    arm = get_arm(scene_obstacles(scene), scene.robot, scene.tool_frame)
+    return arm.fk(scene.start_configuration)[0]
 
 
 class PickPlaceTask(Task):
