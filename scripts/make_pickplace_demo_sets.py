@@ -1,7 +1,8 @@
 """Regenerate the bundled pick-and-place demonstration sets in tutor/assets/demos/.
 
 Each demo is a kinesthetic-style recording made by :meth:`PickPlaceTask.demonstrate`
-(20 Hz; t in s, the gripper position x, y, z in m, the hand g: 0 open, 1 closed), as a
+(the simulated teacher of :mod:`tutor.tasks.kinesthetic`;
+20 Hz; t in s, the gripper position x, y, z in m, the hand g: 0 open, 1 closed), as a
 person guiding the Panda by hand would record it. ``tests/test_pickplace_app.py``
 loads them.
 

@@ -48,6 +48,15 @@ def test_scene_matches_the_paper(task):
     assert task.start[2] > 0.3  # the start pose is well above the table
 
 
+def test_start_is_the_tool_at_the_start_configuration(task):
+    from tutor.robot import get_arm
+
+    # the Panda's "ready" pose (tests/test_robot.py checks the same numbers)
+    np.testing.assert_allclose(task.start, [0.30702, 0.0, 0.48687], atol=1e-5)
+    p, _ = get_arm().fk(task.scene.start_configuration)
+    np.testing.assert_array_equal(task.start, p)
+
+
 def test_a_correct_carry_passes(task):
     ctx = {"delta_g": 0.01, "delta_r": 0.01}
     v = task.judge(carry(task, 5)[None], task.conditions[[5]], ctx)
@@ -133,7 +142,8 @@ def test_wrong_plant_and_sloppy_grab_are_incorrect(task):
 @pytest.mark.parametrize(
     "make, words",
     [
-        (lambda d: d * [1, 1000, 1000, 1000, 1], "millimetres"),
+        (lambda d: d * [1, 1000, 1000, 1000, 1], "millimetres: divide the positions by 1000"),
+        (lambda d: d * [1, 100, 100, 100, 1], "centimetres: divide the positions by 100\\."),
         (lambda d: d * [1, 1, 1, 1, 2], "between 0 \\(open\\) and 1"),
         (
             lambda d: np.column_stack([d[:, 0], np.tile(d[0, 1:4], (len(d), 1)), d[:, 4]]),
@@ -146,6 +156,20 @@ def test_preprocess_rejects_junk(task, make, words):
     raw = task.demonstrate(3, np.random.default_rng(2))
     with pytest.raises(InvalidDemoError, match=words):
         task.preprocess(make(raw))
+
+
+@pytest.mark.parametrize("scale", [1e5, 1e6])
+def test_preprocess_guesses_no_unit_for_absurd_positions(task, scale):
+    raw = task.demonstrate(3, np.random.default_rng(2)) * [1, scale, scale, scale, 1]
+    with pytest.raises(InvalidDemoError, match="must be in metres") as err:
+        task.preprocess(raw)
+    assert "looks like" not in str(err.value)
+
+
+def test_preprocess_accepts_metres_next_to_the_limit(task):
+    raw = task.demonstrate(3, np.random.default_rng(2))
+    raw[5, 1] = 2.9  # one wild sample, still read as metres (judged, not rejected)
+    assert task.preprocess(raw).shape == (task.scene.n_samples, 5)
 
 
 def test_four_corner_demos_generalise_over_the_tray(task):
@@ -215,3 +239,58 @@ def test_map_agrees_with_full_checks_on_500_realisations(task):
     )
     assert agree >= 0.98
     assert 0 < truth.mean() < 1  # both kinds are in the sample
+
+
+# --- the simulated kinesthetic teacher (tutor.tasks.kinesthetic)
+
+
+def test_kinesthetic_demo_is_the_tasks_and_repeats_with_the_seed(task):
+    from tutor.tasks.kinesthetic import demonstrate
+
+    a = demonstrate(task.scene, task.start, 17, np.random.default_rng(4))
+    np.testing.assert_array_equal(a, task.demonstrate(17, np.random.default_rng(4)))
+    b = demonstrate(task.scene, task.start, 17, np.random.default_rng(5))
+    assert not np.array_equal(a[:, 1:4], b[:, 1:4])  # another person, another path
+    np.testing.assert_allclose(a[0, 1:4], task.start, atol=0.005)  # starts at the start pose
+    assert np.all(np.diff(a[:, 0]) > 0)  # time runs forward
+    assert a[0, 4] == 0.0 and a[-1, 4] == 0.0 and a[:, 4].max() == 1.0
+
+
+def test_kinesthetic_wrong_plant_grabs_a_neighbour(task):
+    from tutor.tasks.kinesthetic import demonstrate
+
+    sc = task.scene
+    for corner in (0, 9, 90, 99):
+        for seed in range(4):
+            raw = demonstrate(sc, task.start, corner, seed, mistake="wrong_plant")
+            grabbed = task.nearest_condition(task.condition_of(task.preprocess(raw)))
+            (r0, c0), (r1, c1) = divmod(corner, sc.cols), divmod(grabbed, sc.cols)
+            assert abs(r0 - r1) + abs(c0 - c1) == 1, (corner, grabbed)  # next to it, on the tray
+
+
+def test_kinesthetic_tremor_is_about_a_millimetre(task):
+    from tutor.tasks.kinesthetic import demonstrate
+
+    raw = demonstrate(task.scene, task.start, 44, np.random.default_rng(8))
+    pause = raw[:, 4] == raw[-1, 4]  # the final pause: the hand holds still but for tremor
+    still = raw[-5:, 1:4]
+    wobble = np.linalg.norm(still - still.mean(axis=0), axis=1)
+    assert pause[-5:].all() and 1e-5 < wobble.max() < 3e-3
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [
+        ({"plant": 100}, "plant must be an index from 0 to 99"),
+        ({"plant": -1}, "plant must be an index"),
+        ({"plant": 2.0}, "plant must be an index"),
+        ({"plant": 3, "mistake": "dropped"}, "unknown mistake 'dropped'"),
+        ({"plant": 3, "rate_hz": 0}, "rate_hz must be a positive number"),
+        ({"plant": 3, "rate_hz": "fast"}, "rate_hz must be a positive number"),
+    ],
+)
+def test_kinesthetic_bad_input_is_named(task, kwargs, words):
+    from tutor.errors import InvalidParameterError
+
+    with pytest.raises(InvalidParameterError, match=words):
+        task.demonstrate(**kwargs)

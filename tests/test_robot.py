@@ -94,6 +94,53 @@ def test_fk_changes_with_joint_1(arm):
     np.testing.assert_allclose(p, [0.0, 0.30702, 0.48687], atol=1e-4)
 
 
+def _pose(p, R):
+    M = np.eye(4)
+    M[:3, :3], M[:3, 3] = R, p
+    return M
+
+
+def test_visual_placements_move_rigidly_with_their_links(arm):
+    names = [g.name for g in load_robot().visual_model.geometryObjects]
+    rng = np.random.default_rng(5)
+    qs = rng.uniform(arm.lower, arm.upper, size=(6, arm.nq))
+    placements = arm.visual_placements(qs)
+    assert placements.shape == (6, len(names), 4, 4)
+    np.testing.assert_array_equal(placements[:, :, 3], np.tile([0.0, 0, 0, 1], (6, 11, 1)))
+    # the base stands still; the hand keeps its offset from the tool frame
+    base, hand = names.index("panda_link0_0"), names.index("panda_hand_0")
+    np.testing.assert_allclose(placements[:, base], placements[:1, base].repeat(6, 0), atol=1e-12)
+    tool = [_pose(*arm.fk(q)) for q in qs]
+    offsets = [np.linalg.inv(T) @ M for T, M in zip(tool, placements[:, hand], strict=True)]
+    np.testing.assert_allclose(offsets, [offsets[0]] * 6, atol=1e-9)
+    assert not np.allclose(placements[0], placements[1])  # the links did move
+    # one configuration gives the same as a batch of one
+    np.testing.assert_allclose(arm.visual_placements(qs[2]), placements[2], atol=1e-15)
+
+
+def test_visual_placements_of_fingers_follow_the_opening(arm):
+    names = [g.name for g in load_robot().visual_model.geometryObjects]
+    left, right = names.index("panda_leftfinger_0"), names.index("panda_rightfinger_0")
+    shut = START_CONFIGURATION.copy()
+    shut[7:] = 0.0
+    wide, narrow = arm.visual_placements(np.array([START_CONFIGURATION, shut]))
+    gap = np.linalg.norm(wide[left, :3, 3] - wide[right, :3, 3])
+    assert gap - np.linalg.norm(narrow[left, :3, 3] - narrow[right, :3, 3]) == pytest.approx(0.08)
+
+
+@pytest.mark.parametrize(
+    "qs", [np.zeros(8), np.zeros((3, 8)), np.zeros((0, 9)), [[np.nan] * 9], "start"]
+)
+def test_visual_placements_bad_configurations_are_named(arm, qs):
+    with pytest.raises(InvalidParameterError, match="configurations"):
+        arm.visual_placements(qs)
+
+
+def test_visual_placements_need_a_geometry_model(arm):
+    with pytest.raises(InvalidParameterError, match="GeometryModel"):
+        arm.visual_placements(START_CONFIGURATION, visual_model="meshes")
+
+
 # --- inverse kinematics
 
 

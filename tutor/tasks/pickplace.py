@@ -32,7 +32,7 @@ from ..fileio import read_json
 from ..framework.task import Task, Verdict
 from ..resources import asset
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
-from .paths import minimum_jerk_through
+from . import kinesthetic
 
 __all__ = ["PickPlaceScene", "PickPlaceTask", "load_scene", "start_position", "DEFAULT_SCENE_PATH"]
 
@@ -133,6 +133,24 @@ def load_scene(path=None) -> PickPlaceScene:
 GRAB_LEVEL = 0.5  # the hand counts as closed when g >= 0.5
 
 
+#: Positions (m) beyond this are not metres: the arm reaches about 0.9 m.
+MAX_EXTENT = 3.0
+
+
+def _unit_hint(extent: float) -> str:
+    """Which unit positions reaching ``extent`` (> MAX_EXTENT) were probably given in.
+
+    A recording in metres reaches 0.5 to 0.9 m (the start pose, the tray and the bin),
+    so in centimetres it reaches 50 to 90 and in millimetres 500 to 900; anything
+    beyond a millimetre reading of :data:`MAX_EXTENT` gets no guess.
+    """
+    if extent <= 100 * MAX_EXTENT:
+        return " It looks like centimetres: divide the positions by 100."
+    if extent <= 1000 * MAX_EXTENT:
+        return " It looks like millimetres: divide the positions by 1000."
+    return ""
+
+
 def _first(mask: np.ndarray) -> np.ndarray:
     """Index of the first True along the last axis, or -1 where there is none."""
     idx = np.argmax(mask, axis=-1)
@@ -140,15 +158,11 @@ def _first(mask: np.ndarray) -> np.ndarray:
 
 
 def start_position(scene: PickPlaceScene) -> np.ndarray:
-    """The tool centre point at the start configuration (forward kinematics), shape (3,)."""
-    import pinocchio as pin
+    """The tool centre point at the start configuration (:meth:`Arm.fk`), shape (3,)."""
+    from ..robot import get_arm, scene_obstacles
 
-    from ..robot import load_robot
-
-    robot = load_robot(scene.robot)
-    data = robot.model.createData()
-    pin.framesForwardKinematics(robot.model, data, scene.start_configuration)
-    return data.oMf[robot.model.getFrameId(scene.tool_frame)].translation.copy()
+    arm = get_arm(scene_obstacles(scene), scene.robot, scene.tool_frame)
+    return arm.fk(scene.start_configuration)[0]
 
 
 class PickPlaceTask(Task):
@@ -257,13 +271,10 @@ class PickPlaceTask(Task):
         demo = check_demo(raw, "the demonstration", n_columns=5)
         xyz, g = demo[:, 1:4], demo[:, 4]
         extent = float(np.abs(xyz).max())
-        if extent > 3.0:
-            unit = (
-                " It looks like millimetres: divide the positions by 1000." if extent < 3000 else ""
-            )
+        if extent > MAX_EXTENT:
             raise InvalidDemoError(
                 f"positions reach {extent:.4g}, beyond the arm's reach of about 0.9 m; positions "
-                f"must be in metres.{unit}"
+                f"must be in metres.{_unit_hint(extent)}"
             )
         if g.min() < -1e-6 or g.max() > 1 + 1e-6:
             raise InvalidDemoError(
@@ -284,77 +295,15 @@ class PickPlaceTask(Task):
     def demonstrate(self, plant: int, rng=None, mistake: str | None = None, rate_hz=20.0):
         """A kinesthetic-style demonstration to ``plant`` as a person would give it.
 
-        The hand is guided through via points (above the plant, grasp, lift, above the
-        bin, release) with minimum-jerk motion between them, person-to-person
-        variability in the via points and timing, a little hand tremor, and the
-        button pressed (hand closed) at the grasp and released over the bin.
-
-        Parameters
-        ----------
-        plant : int
-            Index of the plant the teacher chose (0 .. 99).
-        mistake : {None, "wrong_plant", "sloppy_grab"}
-            "wrong_plant": the teacher guides the arm to a neighbouring plant;
-            "sloppy_grab": the hand closes 2-3 cm off the plant.
+        See :func:`tutor.tasks.kinesthetic.demonstrate` (the simulated teacher's hand:
+        via points, variability, tremor and the mistakes it can make).
 
         Returns
         -------
         ndarray (T, 5)
             t (s), x, y, z (m), g (0 open, 1 closed).
         """
-        sc, rng = self.scene, np.random.default_rng(rng)
-        target = int(plant)
-        if mistake == "wrong_plant":
-            r, c = divmod(target, sc.cols)
-            moves = [
-                (dr, dc)
-                for dr, dc in ((0, 1), (0, -1), (1, 0), (-1, 0))
-                if 0 <= r + dr < sc.rows and 0 <= c + dc < sc.cols
-            ]
-            dr, dc = moves[rng.integers(len(moves))]
-            target = sc.plant_index(r + dr, c + dc)
-        elif mistake not in (None, "sloppy_grab"):
-            raise InvalidDemoError(
-                f"unknown mistake {mistake!r}; use 'wrong_plant' or 'sloppy_grab'"
-            )
-        grasp = sc.plant_positions[target] + rng.normal(0, 0.005, 3)  # hand placement
-        if mistake == "sloppy_grab":
-            angle = rng.uniform(0, 2 * np.pi)
-            grasp = grasp + rng.uniform(0.02, 0.03) * np.array([np.cos(angle), np.sin(angle), 0])
-        release = sc.release_point + np.r_[rng.normal(0, 0.005, 2), rng.normal(0, 0.005)]
-        # A person guiding the arm makes one smooth reach (through a point above the
-        # plant down to the grasp) and one smooth transport (lift, over the bin, down
-        # to the release), pressing the button at each end; one pace per demo.
-        reach = [self.start, grasp + [0, 0, 0.10] + rng.normal(0, 0.005, 3), grasp]
-        carry = [
-            grasp,
-            grasp + [0, 0, 0.15] + rng.normal(0, 0.005, 3),
-            release + [0, 0, 0.06] + rng.normal(0, 0.005, 3),
-            release,
-        ]
-        pace = rng.uniform(0.85, 1.2)
-        pieces, hands, t0 = [], [], 0.0
-        for points, seconds, hand in ((reach, 4.5, 0.0), (carry, 5.5, 1.0)):
-            dur = seconds * pace * rng.uniform(0.95, 1.05)
-            n = max(int(dur * rate_hz), 2)
-            move = minimum_jerk_through(points, n + 1)[:-1]
-            pieces.append(
-                np.column_stack([t0 + np.arange(n) / rate_hz * dur / (n / rate_hz), move])
-            )
-            hands.append(np.full(n, hand))
-            t0 += dur
-            dwell = 0.6 * pace * rng.uniform(0.9, 1.1)  # press (or release) the button, pause
-            m = max(int(dwell * rate_hz), 1)
-            stay = np.tile(points[-1], (m, 1))
-            pieces.append(np.column_stack([t0 + np.arange(m) / rate_hz, stay]))
-            hands.append(np.full(m, 1.0 - hand))
-            t0 += m / rate_hz
-        path = np.concatenate(pieces)
-        g = np.concatenate(hands)
-        tremor = rng.normal(scale=0.001, size=(len(path), 3))
-        kernel = np.hanning(7) / np.hanning(7).sum()
-        tremor = np.column_stack([np.convolve(tremor[:, j], kernel, mode="same") for j in range(3)])
-        return np.column_stack([path[:, 0], path[:, 1:] + tremor, g])
+        return kinesthetic.demonstrate(self.scene, self.start, plant, rng, mistake, rate_hz)
 
     @staticmethod
     def duration(raw) -> float:

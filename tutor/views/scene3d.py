@@ -492,20 +492,7 @@ class Scene3D:
 
     def _placements(self, qs: np.ndarray) -> np.ndarray:
         """Homogeneous placement (T, G, 4, 4) of each visual geometry for each q."""
-        import pinocchio as pin
-
-        from ..robot import load_robot
-
-        robot = load_robot(self.scene.robot)
-        model, vmodel = robot.model, robot.visual_model
-        data, vdata = model.createData(), vmodel.createData()
-        out = np.empty((len(qs), vmodel.ngeoms, 4, 4))
-        for t, q in enumerate(qs):
-            pin.forwardKinematics(model, data, q)
-            pin.updateGeometryPlacements(model, data, vmodel, vdata)
-            for g in range(vmodel.ngeoms):
-                out[t, g] = vdata.oMg[g].homogeneous
-        return out
+        return self._get_arm().visual_placements(qs)
 
     # ------------------------------------------------------------------ public drawing
 

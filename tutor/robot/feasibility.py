@@ -1,0 +1,412 @@
+"""Criterion (i), the admissible space X: a precomputed voxel map, or full IK checks.
+
+Checking a whole realisation with IK and collision tests takes tens of milliseconds;
+judging 100 realisations at every step of a session uses :class:`FeasibilityMap`
+instead, a voxel map of X built by ``scripts/make_feasibility_map.py`` and bundled as
+``tutor/assets/feasibility_map.npz``. :class:`FullCheck` follows every path with the
+arm; :class:`MapCheck` uses the map inside its grid and the full check outside.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InvalidFileError, InvalidParameterError
+from ..resources import asset
+from .arm import Arm
+from .checks import check_paths, check_vector
+from .model import DOWN, REACH_TOL, TILT_TOL
+from .obstacles import check_boxes
+
+__all__ = [
+    "FeasibilityMap",
+    "FullCheck",
+    "MapCheck",
+    "default_map",
+    "DEFAULT_MAP_PATH",
+    "MAP_FORMAT",
+    "MAP_VERSION",
+]
+
+DEFAULT_MAP_PATH = asset("feasibility_map.npz")
+MAP_FORMAT = "lfd-tutor-feasibility-map"
+MAP_VERSION = 1
+
+
+class FeasibilityMap:
+    """A voxel map of X: where the tool can be, pointing down, reached and collision-free.
+
+    Each voxel centre stores a signed margin (m): positive inside X. Near the border
+    the margin is the smaller of the arm's clearance to obstacles and itself and
+    ``REACH_TOL`` minus the IK error; away from the border it is only a sign. A point
+    is in X when the trilinear interpolation of the margins is positive, which puts
+    the border between voxel centres where the margins say, not half way. Points
+    outside the grid are not in X.
+
+    The map has two layers: fingers open (layer 0) and closed (layer 1). Without a
+    hand command the open layer answers (the conservative choice: open fingers stick
+    out further); with one, samples whose hand is closed (g >= 0.5) use layer 1.
+
+    Parameters
+    ----------
+    margin : ndarray (nx, ny, nz) or (2, nx, ny, nz)
+        Signed margin at the voxel centres ``origin + spacing * (i, j, k)``: one layer
+        (used for both hand states) or the open and closed layers.
+    origin : array_like (3,)
+        Centre of voxel (0, 0, 0) (m).
+    spacing : float
+        Voxel edge (m).
+    meta : dict, optional
+        What the map was built for (robot, tool frame, obstacles, tolerances).
+    """
+
+    def __init__(self, margin, origin, spacing: float, meta: dict | None = None):
+        m = np.asarray(margin, dtype=np.float32)
+        if m.ndim == 3:
+            m = np.stack([m, m])
+        if m.ndim != 4 or m.shape[0] != 2 or min(m.shape[1:]) < 2:
+            raise InvalidParameterError(
+                f"margin must be a 3-D grid or two of them (2, nx, ny, nz), got shape {m.shape}"
+            )
+        if not np.all(np.isfinite(m)):
+            raise InvalidParameterError("margin must be finite")
+        self.margin = m
+        self.origin = check_vector(origin, 3, "origin")
+        self.spacing = float(spacing)
+        if not (np.isfinite(self.spacing) and self.spacing > 0):
+            raise InvalidParameterError(f"spacing must be positive, got {spacing!r}")
+        self.shape = m.shape[1:]
+        self.meta = dict(meta or {})
+        self._flat = m.ravel()
+        nx, ny, nz = self.shape
+        self._layer = nx * ny * nz
+        self._strides = np.array([ny * nz, nz, 1])
+
+    def __repr__(self) -> str:
+        return (
+            f"FeasibilityMap({self.shape} voxels of {100 * self.spacing:g} cm from "
+            f"{self.origin.round(3).tolist()} to {self.upper.round(3).tolist()}, "
+            f"{self.feasible().mean():.0%} in X)"
+        )
+
+    @property
+    def upper(self) -> np.ndarray:
+        """Centre of the last voxel, shape (3,)."""
+        return self.origin + self.spacing * (np.array(self.shape) - 1)
+
+    @property
+    def obstacles(self) -> tuple[tuple[str, tuple[float, ...], tuple[float, ...]], ...]:
+        """The boxes the map was built for, to build a matching :class:`Arm`."""
+        names = [str(n) for n in np.asarray(self.meta.get("obstacle_names", [])).reshape(-1)]
+        centers = np.asarray(self.meta.get("obstacle_centers", np.zeros((0, 3)))).reshape(-1, 3)
+        sizes = np.asarray(self.meta.get("obstacle_sizes", np.zeros((0, 3)))).reshape(-1, 3)
+        return check_boxes(zip(names, centers, sizes, strict=True))
+
+    def feasible(self, closed: bool = False) -> np.ndarray:
+        """Voxel centres in X with the hand open (or closed), bool (nx, ny, nz)."""
+        return self.margin[int(bool(closed))] > 0
+
+    def grid_points(self) -> np.ndarray:
+        """Voxel centres, shape (nx, ny, nz, 3)."""
+        axes = [self.origin[i] + self.spacing * np.arange(self.shape[i]) for i in range(3)]
+        return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+
+    def value(self, points, gripper=None) -> np.ndarray:
+        """Interpolated margin (m) at ``points`` (..., 3); -inf outside the grid.
+
+        Parameters
+        ----------
+        points : array_like (..., 3)
+        gripper : array_like (...), optional
+            Hand command per point (0 open .. 1 closed); default open.
+
+        Returns
+        -------
+        ndarray (...) of float
+        """
+        P = np.asarray(points, dtype=float)
+        if P.ndim < 1 or P.shape[-1] != 3:
+            raise InvalidParameterError(f"points must have shape (..., 3), got {P.shape}")
+        shape = P.shape[:-1]
+        P = P.reshape(-1, 3)
+        u = (P - self.origin) / self.spacing
+        dims = np.array(self.shape)
+        inside = np.all((u >= -1e-6) & (u <= dims - 1 + 1e-6), axis=1)  # NaN is outside
+        u = np.where(inside[:, None], np.clip(u, 0, dims - 1), 0.0)
+        i0 = np.minimum(u.astype(np.intp), dims - 2)
+        f = u - i0
+        base = i0 @ self._strides
+        if gripper is not None:
+            try:
+                g = np.broadcast_to(np.asarray(gripper, dtype=float), shape).reshape(-1)
+            except ValueError as exc:
+                raise InvalidParameterError(
+                    f"gripper must have shape {shape} like the points, got {np.shape(gripper)}"
+                ) from exc
+            base = base + np.where(g >= 0.5, self._layer, 0)
+        sx, sy, sz = self._strides
+        m = self._flat
+        fx, fy, fz = f[:, 0], f[:, 1], f[:, 2]
+        gx, gy, gz = 1 - fx, 1 - fy, 1 - fz
+        c00 = m[base] * gz + m[base + sz] * fz
+        c01 = m[base + sy] * gz + m[base + sy + sz] * fz
+        c10 = m[base + sx] * gz + m[base + sx + sz] * fz
+        c11 = m[base + sx + sy] * gz + m[base + sx + sy + sz] * fz
+        v = (c00 * gy + c01 * fy) * gx + (c10 * gy + c11 * fy) * fx
+        return np.where(inside, v, -np.inf).reshape(shape)
+
+    def contains(self, points, gripper=None) -> np.ndarray:
+        """Whether each point (..., 3) is in X (tool pointing down).
+
+        Parameters
+        ----------
+        points : array_like (..., 3)
+            Tool positions (m, base frame).
+        gripper : array_like (...), optional
+            Hand command per point (0 open .. 1 closed). Without it the fingers are
+            taken open, which is never less strict than closed.
+
+        Returns
+        -------
+        ndarray (...) of bool
+        """
+        return self.value(points, gripper) > 0
+
+    def path_ok(self, paths, gripper=None) -> np.ndarray:
+        """Whether every sample of each path (..., T, 3) is in X; bool (...)."""
+        return self.contains(paths, gripper).all(axis=-1)
+
+    def matches(
+        self,
+        obstacles,
+        robot: str = "panda",
+        tool_frame: str = "panda_hand_tcp",
+        atol: float = 1e-6,
+    ) -> bool:
+        """Whether the map was built for these obstacles, robot and tool frame."""
+        boxes = check_boxes(obstacles)
+        meta = self.meta
+        if meta.get("robot") != robot or meta.get("tool_frame") != tool_frame:
+            return False
+        names = list(meta.get("obstacle_names", []))
+        if sorted(names) != sorted(b[0] for b in boxes):
+            return False
+        centers = np.asarray(meta["obstacle_centers"]).reshape(-1, 3)
+        sizes = np.asarray(meta["obstacle_sizes"]).reshape(-1, 3)
+        for name, c, s in boxes:
+            k = names.index(name)
+            if not (np.allclose(centers[k], c, atol=atol) and np.allclose(sizes[k], s, atol=atol)):
+                return False
+        return True
+
+    # ------------------------------------------------------------------ files
+
+    def save(self, path) -> None:
+        """Write the map as a compressed ``.npz`` (plain arrays only, no pickle)."""
+        meta = self.meta
+        names = list(meta.get("obstacle_names", []))
+        np.savez_compressed(
+            path,
+            format=np.array(MAP_FORMAT),
+            version=np.array(MAP_VERSION),
+            margin=self.margin,
+            origin=self.origin,
+            spacing=np.array(self.spacing),
+            robot=np.array(meta.get("robot", "panda")),
+            tool_frame=np.array(meta.get("tool_frame", "panda_hand_tcp")),
+            obstacle_names=np.array(names, dtype=str).reshape(-1),
+            obstacle_centers=np.asarray(meta.get("obstacle_centers", np.zeros((0, 3))), float),
+            obstacle_sizes=np.asarray(meta.get("obstacle_sizes", np.zeros((0, 3))), float),
+            rotation=np.asarray(meta.get("rotation", DOWN), float),
+            reach_tol=np.array(float(meta.get("reach_tol", REACH_TOL))),
+            tilt_tol=np.array(float(meta.get("tilt_tol", TILT_TOL))),
+        )
+
+    @classmethod
+    def load(cls, path=None) -> FeasibilityMap:
+        """Read a map written by :meth:`save` (default: ``assets/feasibility_map.npz``).
+
+        Raises
+        ------
+        InvalidFileError
+            The file is missing, not a map, of another version, or malformed.
+        """
+        path = DEFAULT_MAP_PATH if path is None else Path(path)
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                arrays = {k: z[k] for k in z.files}
+        except FileNotFoundError as exc:
+            raise InvalidFileError(
+                f"no feasibility map at {path}; build it with scripts/make_feasibility_map.py"
+            ) from exc
+        except (OSError, ValueError, EOFError) as exc:
+            raise InvalidFileError(f"{path} is not a readable feasibility map: {exc}") from exc
+        needed = {"format", "version", "margin", "origin", "spacing"}
+        if not needed <= set(arrays) or str(arrays["format"]) != MAP_FORMAT:
+            raise InvalidFileError(f"{path} is not an lfd-tutor feasibility map")
+        if int(arrays["version"]) != MAP_VERSION:
+            raise InvalidFileError(
+                f"{path} is a version {int(arrays['version'])} map; this tutor reads "
+                f"version {MAP_VERSION}: rebuild it with scripts/make_feasibility_map.py"
+            )
+        meta = {
+            k: (str(v) if v.dtype.kind == "U" and v.ndim == 0 else v)
+            for k, v in arrays.items()
+            if k not in needed
+        }
+        try:
+            return cls(arrays["margin"], arrays["origin"], float(arrays["spacing"]), meta)
+        except InvalidParameterError as exc:
+            raise InvalidFileError(f"{path}: {exc}") from exc
+
+
+@lru_cache(maxsize=2)
+def _load_map(path: str) -> FeasibilityMap:
+    return FeasibilityMap.load(path)
+
+
+def default_map(obstacles, robot: str = "panda", tool_frame: str = "panda_hand_tcp", path=None):
+    """The bundled :class:`FeasibilityMap` (read once per process), checked against a scene.
+
+    Parameters
+    ----------
+    obstacles : sequence of (name, center (3,), size (3,))
+        The scene's boxes (:func:`scene_obstacles`).
+    robot, tool_frame : str
+    path : path, optional
+        Another map file (default :data:`DEFAULT_MAP_PATH`).
+
+    Raises
+    ------
+    InvalidParameterError
+        The map was built for other obstacles, robot or tool frame (the scene was
+        edited): rebuild it, or judge with :class:`FullCheck`.
+    """
+    fmap = _load_map(str(DEFAULT_MAP_PATH if path is None else Path(path)))
+    if not fmap.matches(obstacles, robot, tool_frame):
+        raise InvalidParameterError(
+            "the feasibility map was built for another scene (table, tray, bin or robot "
+            "differ): rebuild it with 'python scripts/make_feasibility_map.py', or use the "
+            "slower full check (feasibility='full')"
+        )
+    return fmap
+
+
+class FullCheck:
+    """Criterion (i) at full fidelity: :meth:`Arm.follow` along every path.
+
+    Same interface as :meth:`FeasibilityMap.contains`, so a task can use either; this
+    one runs inverse kinematics and a collision check at every sample (about 20-30 ms
+    per 200-sample path), the map a lookup.
+
+    Parameters
+    ----------
+    arm : Arm
+        The arm with the scene's obstacles.
+    """
+
+    def __init__(self, arm: Arm):
+        self.arm = arm
+
+    def __repr__(self) -> str:
+        return f"FullCheck({self.arm!r})"
+
+    def contains(self, points, gripper=None) -> np.ndarray:
+        """Whether the arm reaches each sample of each path without collision.
+
+        Parameters
+        ----------
+        points : array_like (..., T, 3)
+            Paths; each is followed from the start configuration, warm-starting IK
+            from the previous sample as the robot would move.
+        gripper : array_like (..., T), optional
+            Hand command per sample (default open).
+
+        Returns
+        -------
+        ndarray (..., T) of bool
+        """
+        P, G = check_paths(points, gripper)
+        shape = P.shape[:-1]
+        paths = P.reshape(-1, shape[-1], 3)
+        G = G.reshape(paths.shape[:2])
+        out = np.empty(paths.shape[:2], dtype=bool)
+        for i, (path, g) in enumerate(zip(paths, G, strict=True)):
+            tr = self.arm.follow(path, g)
+            out[i] = tr.converged & ~tr.collision
+        return out.reshape(shape)
+
+    def path_ok(self, paths, gripper=None) -> np.ndarray:
+        """Whether every sample of each path (..., T, 3) is reached collision-free; (...)."""
+        return self.contains(paths, gripper).all(axis=-1)
+
+
+class MapCheck:
+    """Criterion (i) fast: the feasibility map inside its grid, :class:`FullCheck` outside.
+
+    The map covers where realisations usually go; a realisation that leaves the grid
+    (models taught with one or two demos swing wide) but stays within the arm's reach
+    is followed with full IK and collision checks instead of being called outside X.
+    Samples beyond ``reach`` of ``shoulder`` are outside X without further checks, and
+    so are off-grid samples after a path's first sample the map rejects (a path is
+    judged by its first failure).
+
+    Parameters
+    ----------
+    fmap : FeasibilityMap
+    arm : Arm
+        The arm with the scene's obstacles (the same the map was built for).
+    shoulder : array_like (3,)
+        Centre of the sphere the tool can reach pointing down (m): the Panda's
+        shoulder (joint 2 at z = 0.333 m) less the 0.103 m from its flange down to
+        the tool centre point.
+    reach : float
+        Radius of that sphere (m): the flange stays within 0.858 m of the shoulder
+        (measured over 20 000 random configurations), plus a little margin.
+    """
+
+    def __init__(self, fmap: FeasibilityMap, arm: Arm, shoulder=(0.0, 0.0, 0.23), reach=0.87):
+        self.map = fmap
+        self.full = FullCheck(arm)
+        self.shoulder = check_vector(shoulder, 3, "shoulder")
+        self.reach = float(reach)
+
+    def __repr__(self) -> str:
+        return f"MapCheck({self.map!r})"
+
+    def contains(self, points, gripper=None) -> np.ndarray:
+        """Whether the arm reaches each sample of each path without collision.
+
+        Parameters
+        ----------
+        points : array_like (..., T, 3)
+        gripper : array_like (..., T), optional
+            Hand command per sample (default open).
+
+        Returns
+        -------
+        ndarray (..., T) of bool
+        """
+        P, G = check_paths(points, gripper)
+        value = self.map.value(P, G)
+        out = value > 0
+        near = np.linalg.norm(P - self.shoulder, axis=-1) <= self.reach
+        unknown = np.isneginf(value) & near  # off the grid but maybe reachable
+        known_bad = ~out & ~unknown
+        T = P.shape[-2]
+        first_unknown = np.where(unknown.any(axis=-1), np.argmax(unknown, axis=-1), T)
+        first_bad = np.where(known_bad.any(axis=-1), np.argmax(known_bad, axis=-1), T)
+        # a path is judged by its first sample outside X: follow it in full only when
+        # an unknown sample comes before any the map already rejects
+        redo = first_unknown < first_bad  # (...)
+        if redo.any():
+            idx = np.nonzero(redo)
+            out[idx] = self.full.contains(P[idx], G[idx])
+        return out
+
+    def path_ok(self, paths, gripper=None) -> np.ndarray:
+        """Whether every sample of each path (..., T, 3) is in X; bool (...)."""
+        return self.contains(paths, gripper).all(axis=-1)
