@@ -1,20 +1,44 @@
-"""How the tutor is being run: by a person, or headless (CI, nbmake).
+"""How the tutor is being run: by a person or headless, where runs are saved, and by whom.
 
 ``TUTOR_HEADLESS=1`` (set by ``scripts/test.sh``) switches the notebooks to headless
 mode: cells that would wait for a person instead feed bundled demonstrations.
 nbmake runs a real kernel, so "am I in a notebook?" checks cannot tell a test from a
 person; the environment variable can.
 
-``TUTOR_SESSION_DIR`` moves where teaching runs are autosaved (default ``./sessions``
-next to the notebooks).
+``TUTOR_SESSION_DIR`` moves where teaching runs are saved (default ``./sessions`` next to
+the notebooks); each trainee gets a folder of their own inside it.
+
+Trainee folders. A trainee's folder key is derived from their name *injectively*: the
+name is normalised (Unicode NFC, surrounding spaces removed, inner runs of spaces made
+one), then the key is a readable ASCII part of it followed by a short hash of the whole
+normalised name. So 'Mai Anh' and 'Mai_Anh', two different Devanagari names or two
+emoji get different folders, while 'Zoë' typed as NFC or as NFD gets the same one. Keys
+are lower-case ASCII (safe on case-insensitive file systems) and at most 52 characters.
+On a JupyterHub, ``JUPYTERHUB_USER`` is the default name.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
+import re
+import unicodedata
 from pathlib import Path
 
-__all__ = ["headless", "session_dir"]
+from .errors import InvalidParameterError, SaveError
+
+__all__ = [
+    "headless",
+    "session_dir",
+    "sessions_root",
+    "trainee_key",
+    "normalise_name",
+    "default_trainee",
+]
+
+#: the readable part of a folder key is at most this long
+_READABLE = 40
+_HASH_CHARS = 10
 
 
 def headless() -> bool:
@@ -22,10 +46,70 @@ def headless() -> bool:
     return os.environ.get("TUTOR_HEADLESS", "").strip().lower() in ("1", "true", "yes")
 
 
-def session_dir(trainee: str = "trainee") -> Path:
-    """The folder for one trainee's session files (created if needed)."""
-    safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in trainee.strip()) or "trainee"
-    base = Path(os.environ.get("TUTOR_SESSION_DIR", "sessions"))
-    folder = base / safe
-    folder.mkdir(parents=True, exist_ok=True)
+def normalise_name(name) -> str:
+    """The trainee's name as stored: NFC, trimmed, single spaces (refuses empty names)."""
+    if not isinstance(name, str):
+        raise InvalidParameterError(
+            f"the trainee's name must be text, e.g. trainee = \"Mai Anh\"; got {name!r}"
+        )
+    text = " ".join(unicodedata.normalize("NFC", name).split())
+    if not text or any(unicodedata.category(c) == "Cc" for c in text):
+        raise InvalidParameterError(
+            "the trainee's name is empty or holds control characters: type a name, e.g. "
+            'trainee = "Mai Anh"'
+        )
+    if len(text) > 200:
+        raise InvalidParameterError(
+            f"the trainee's name is {len(text)} characters long; use at most 200"
+        )
+    return text
+
+
+def trainee_key(name) -> str:
+    """The folder key of a trainee (see the module docstring), e.g. ``mai-anh-1c9e5b2f0a``."""
+    text = normalise_name(name)
+    ascii_part = unicodedata.normalize("NFKD", text).encode("ascii", "ignore").decode()
+    readable = re.sub(r"[^a-z0-9]+", "-", ascii_part.lower()).strip("-")[:_READABLE].strip("-")
+    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:_HASH_CHARS]
+    return f"{readable}-{digest}" if readable else f"t-{digest}"
+
+
+def default_trainee() -> str:
+    """The trainee's name when none is typed: ``JUPYTERHUB_USER`` on a hub, else "trainee"."""
+    user = os.environ.get("JUPYTERHUB_USER", "").strip()
+    return user or "trainee"
+
+
+def sessions_root() -> Path:
+    """The folder that holds every trainee's folder (``TUTOR_SESSION_DIR`` or ./sessions)."""
+    base = os.environ.get("TUTOR_SESSION_DIR", "").strip() or "sessions"
+    if "\x00" in base:
+        raise InvalidParameterError("TUTOR_SESSION_DIR holds a NUL character: set it to a folder")
+    return Path(base)
+
+
+def session_dir(trainee=None) -> Path:
+    """The folder for one trainee's run files (created if needed).
+
+    Raises
+    ------
+    InvalidParameterError
+        The name is empty, or ``TUTOR_SESSION_DIR`` is a file rather than a folder.
+    SaveError
+        The folder cannot be made (no permission, a read-only disk).
+    """
+    root = sessions_root()
+    if root.exists() and not root.is_dir():
+        raise InvalidParameterError(
+            f"TUTOR_SESSION_DIR is {root}, which is a file, not a folder: point it at a "
+            "folder (it is made if missing)"
+        )
+    folder = root / trainee_key(default_trainee() if trainee is None else trainee)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SaveError(
+            f"cannot make the folder {folder} for the trainee's runs ({exc.strerror or exc}); "
+            "set TUTOR_SESSION_DIR to a folder you can write to"
+        ) from exc
     return folder

@@ -4,15 +4,28 @@
 - :mod:`.metrics`: efficacy eps, efficiency eta, the session score.
 - :mod:`.failures`: incorrect, ambiguous and undemonstrated failures.
 - :mod:`.session`: :class:`TeachingSession`, demos in, feedback records out.
+- :mod:`.record`: :class:`RunRecord`, the typed, versioned record of one run (its
+  attempts, demos and events), the one file format of a teaching run.
+- :mod:`.run`: :class:`TeachingRun`, a record kept in step with its session.
 """
 
 from .failures import AMBIGUOUS, INCORRECT, UNDEMONSTRATED, TeachingWarning, Thresholds, similarity
 from .metrics import SessionScore, efficacy, efficiency, session_score
+from .record import Attempt, Demo, Event, RunRecord, Test, Trainee
+from .run import RunOverError, TeachingRun
 from .session import FEEDBACK_MODES, FeedbackRecord, TeachingSession
 from .task import Task, Verdict
 
 __all__ = [
     "AMBIGUOUS",
+    "Attempt",
+    "Demo",
+    "Event",
+    "RunOverError",
+    "RunRecord",
+    "TeachingRun",
+    "Test",
+    "Trainee",
     "INCORRECT",
     "UNDEMONSTRATED",
     "FEEDBACK_MODES",

@@ -7,6 +7,11 @@ task's criteria, and reports efficacy eps, efficiency eta, the change in eps, th
 set r of realisations the teacher is shown (by feedback mode) and the failures
 (incorrect, ambiguous, undemonstrated; see :mod:`tutor.framework.failures`).
 
+The session is the computation only: it holds no file format and no run state. What a
+run is (trainee, condition, every attempt and event) lives in its typed record
+(:mod:`tutor.framework.record`), and :class:`tutor.framework.run.TeachingRun` keeps the
+two in step and saves the record.
+
 Feedback modes (what r is):
 
 ``"none"``      r is empty (NF).
@@ -23,8 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InvalidFileError, InvalidParameterError, TutorError
-from ..fileio import read_json, write_json
+from ..errors import InvalidParameterError
 from .failures import (
     TeachingWarning,
     Thresholds,
@@ -35,11 +39,9 @@ from .failures import (
 from .metrics import SessionScore, efficacy, efficiency, session_score
 from .task import Task
 
-__all__ = ["FeedbackRecord", "TeachingSession", "FEEDBACK_MODES", "SESSION_FORMAT"]
+__all__ = ["FeedbackRecord", "TeachingSession", "FEEDBACK_MODES"]
 
 FEEDBACK_MODES = ("none", "all", "replay", "batch", "selected")
-SESSION_FORMAT = "lfd-tutor-session"
-SESSION_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -137,11 +139,6 @@ class TeachingSession:
         self._history: list[FeedbackRecord] = []
         self._learners: list = []
         self._realisations: list[np.ndarray] = []
-        #: free JSON-ready notes kept in the session file (e.g. the experimental condition)
-        self.meta: dict = {}
-        #: what the teacher did: ("add", n_demos after), ("undo", n_demos after),
-        #: ("remove", number removed) or ("reset", 0)
-        self.events: list[tuple[str, int]] = []
 
     # ---------------------------------------------------------------- state
 
@@ -227,7 +224,6 @@ class TeachingSession:
         self._learners.append(learner)
         self._realisations.append(realisations)
         self._history.append(record)
-        self.events.append(("add", self.n_demos))
         return record
 
     def undo(self) -> FeedbackRecord | None:
@@ -236,7 +232,6 @@ class TeachingSession:
             raise InvalidParameterError("there is no demo to undo")
         for stack in self._stacks:
             stack.pop()
-        self.events.append(("undo", self.n_demos))
         return self.latest
 
     def remove_demo(self, number: int) -> FeedbackRecord | None:
@@ -257,15 +252,12 @@ class TeachingSession:
             del stack[number - 1 :]
         for demo, cond, sel in zip(later, later_conditions, shown, strict=True):
             self.add_demo(demo, shown=sel if self.feedback == "selected" else None, condition=cond)
-            self.events.pop()
-        self.events.append(("remove", number))
         return self.latest
 
     def reset(self) -> None:
         """Remove every demo."""
         for stack in self._stacks:
             stack.clear()
-        self.events.append(("reset", 0))
 
     def _check_shown(self, shown) -> np.ndarray:
         if shown is None:
@@ -363,84 +355,3 @@ class TeachingSession:
         if self.feedback == "selected":
             return selected
         return np.zeros(0, dtype=int)
-
-    # ---------------------------------------------------------------- files
-
-    def to_dict(self) -> dict:
-        """JSON-ready form; :meth:`from_dict` rebuilds an identical session."""
-        return {
-            "format": SESSION_FORMAT,
-            "version": SESSION_VERSION,
-            "task": self.task.to_spec(),
-            "feedback": self.feedback,
-            "batch": self.batch.tolist(),
-            "thresholds": self.thresholds.to_dict(),
-            "demos": [d.tolist() for d in self._demos],
-            "conditions": [c.tolist() for c in self._conditions],
-            "shown": [
-                r.shown.tolist() if self.feedback == "selected" else None for r in self._history
-            ],
-            "records": [r.to_dict() for r in self._history],
-            "events": [list(e) for e in self.events],
-            "meta": self.meta,
-        }
-
-    @classmethod
-    def from_dict(cls, data, task: Task, learner=None) -> TeachingSession:
-        """Rebuild a session by replaying its demos (raises InvalidFileError when malformed)."""
-        if not isinstance(data, dict) or data.get("format") != SESSION_FORMAT:
-            raise InvalidFileError(
-                "this is not an lfd-tutor session (no 'format': 'lfd-tutor-session' entry)"
-            )
-        if data.get("version") != SESSION_VERSION:
-            raise InvalidFileError(
-                f"session version {data.get('version')!r} is not supported (expected "
-                f"{SESSION_VERSION}); update lfd-tutor"
-            )
-        spec = data.get("task")
-        if not isinstance(spec, dict) or spec.get("name") != task.name:
-            found = spec.get("name") if isinstance(spec, dict) else spec
-            raise InvalidFileError(
-                f"the session is for task {found!r}, not {task.name!r}; "
-                "open it with the matching task"
-            )
-        demos = data.get("demos")
-        if not isinstance(demos, list):
-            raise InvalidFileError("the session has no list of 'demos'")
-        shown = data.get("shown") or [None] * len(demos)
-        conditions = data.get("conditions") or [None] * len(demos)
-        if not isinstance(conditions, list) or len(conditions) != len(demos):
-            raise InvalidFileError("the session's 'conditions' list does not match its demos")
-        if not isinstance(shown, list) or len(shown) != len(demos):
-            raise InvalidFileError("the session's 'shown' list does not match its demos")
-        try:
-            thresholds = Thresholds(**data.get("thresholds", {}))
-            session = cls(
-                task,
-                learner=learner,
-                feedback=data.get("feedback", "all"),
-                thresholds=thresholds,
-                batch=data.get("batch") or None,
-            )
-            for i, (demo, sel, cond) in enumerate(zip(demos, shown, conditions, strict=True)):
-                if not isinstance(demo, list):
-                    raise InvalidFileError(f"demo {i + 1} in the session is not a table of numbers")
-                session.add_demo(demo, shown=sel, condition=cond)
-            meta = data.get("meta", {})
-            if not isinstance(meta, dict):
-                raise InvalidFileError("the session's 'meta' entry must be an object")
-            session.meta = meta
-        except InvalidFileError:
-            raise
-        except (TutorError, TypeError, ValueError) as exc:
-            raise InvalidFileError(f"the session file holds invalid data: {exc}") from exc
-        return session
-
-    def save(self, path):
-        """Write the session to ``path`` atomically (JSON); returns the path."""
-        return write_json(path, self.to_dict())
-
-    @classmethod
-    def load(cls, path, task: Task, learner=None) -> TeachingSession:
-        """Read a session written by :meth:`save`."""
-        return cls.from_dict(read_json(path, "session file"), task, learner)

@@ -148,7 +148,7 @@ def _task(name: str, settings: StudySettings):
     return _TASKS[key]
 
 
-def run_rows(session, base: dict, ambiguity: float | None, target: float, score: str):
+def run_rows(run, base: dict, ambiguity: float | None, target: float, score: str):
     """Summarise one finished run: one row for ``runs`` and its rows for ``demos``.
 
     Failures on the final demonstration set b: *errors* are demos that fail the task
@@ -157,12 +157,12 @@ def run_rows(session, base: dict, ambiguity: float | None, target: float, score:
     delta_l <= eps_m - eps_{m-1} <= delta_u (re-checked here with ``ambiguity`` as
     delta_a, or the task's own when None).
     """
+    session, attempt = run.session, run.attempt
     history = session.history
     thr = Thresholds()
     delta_a = session.task.ambiguity_distance if ambiguity is None else ambiguity
-    targets = session.meta.get("targets", [""] * len(history))
     demo_rows = []
-    for rec, why in zip(history, targets, strict=False):
+    for rec, demo in zip(history, attempt.demos, strict=True):
         demo_rows.append(
             {
                 **base,
@@ -173,7 +173,7 @@ def run_rows(session, base: dict, ambiguity: float | None, target: float, score:
                 "correct": rec.demo_passed,
                 "ambiguous": rec.demo_passed
                 and is_ambiguous(rec.similarity, rec.delta, delta_a, thr),
-                "chosen_by": why,
+                "chosen_by": demo.chosen_by,
             }
         )
     last = history[-1]
@@ -190,9 +190,9 @@ def run_rows(session, base: dict, ambiguity: float | None, target: float, score:
         "errors": sum(not r.demo_passed for r in history),
         "undemonstrated": last.n_undemonstrated,
         "ambiguous": sum(d["ambiguous"] for d in demo_rows),
-        "slips": session.meta.get("slips", 0),
-        "retries": session.meta.get("retries", 0),
-        "why_stopped": session.meta.get("why_stopped", ""),
+        "slips": sum(bool(d.mistake) for d in (*attempt.demos, *attempt.undone)),
+        "retries": len(attempt.undone),
+        "why_stopped": attempt.stopped,
     }
     return row, demo_rows
 
@@ -215,12 +215,10 @@ def simulate_teacher(
 
         model = MazeTeacher(traits, _task("maze", settings))
         for k, cond in enumerate(spec["conditions"], start=1):
-            session = model.teach(cond, _rng(seed, experiment, teacher, k))
+            run = model.teach(cond, _rng(seed, experiment, teacher, k))
             base = {"teacher": teacher, "condition": cond, "run": 1}
-            row, drows = run_rows(session, base, None, settings.target, "target")
-            row["followed_rules"] = (
-                float(np.mean(session.meta["followed_rules"])) if cond == "VR" else np.nan
-            )
+            row, drows = run_rows(run, base, None, settings.target, "target")
+            row["followed_rules"] = float(np.mean(run.compliance)) if cond == "VR" else np.nan
             rows.append({**row, **trait_cols})
             demo_rows += drows
     else:
@@ -232,9 +230,7 @@ def simulate_teacher(
         for k in range(1, spec["runs"] + 1):
             run = model.teach(cond, _rng(seed, experiment, teacher, k))
             base = {"teacher": teacher, "condition": cond, "run": k}
-            row, drows = run_rows(
-                run.session, base, settings.pickplace_ambiguity, settings.target, "final"
-            )
+            row, drows = run_rows(run, base, settings.pickplace_ambiguity, settings.target, "final")
             row["seconds"] = run.elapsed
             rows.append({**row, **trait_cols})
             demo_rows += drows

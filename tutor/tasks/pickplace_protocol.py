@@ -15,45 +15,49 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InvalidParameterError, TutorError
-from ..framework import TeachingSession
+from ..errors import InvalidParameterError
+from ..framework import RunOverError, TeachingRun
+from ..framework.record import utc_now
 from .pickplace import PickPlaceTask
 
-__all__ = ["CONDITIONS", "PickPlaceRun", "RunOverError"]
+__all__ = ["CONDITIONS", "PickPlaceRun", "RunOverError", "RUNS"]
 
 CONDITIONS = {"NF": "none", "RF": "replay", "BF": "batch", "SF": "selected"}
+#: each trainee teaches three runs in their condition
+RUNS = 3
 
 
-class RunOverError(TutorError, RuntimeError):
-    """The teaching run has used its 15 minutes or was finished."""
-
-
-class PickPlaceRun:
+class PickPlaceRun(TeachingRun):
     """One teaching run of one trainee in one condition, with its clock.
 
-    Parameters
-    ----------
-    condition : {"NF", "RF", "BF", "SF"}
-    task : PickPlaceTask, optional
-    session : TeachingSession, optional
-        Resume this session (its ``meta`` holds the clock); a new one otherwise.
+    Make one with ``PickPlaceRun.new(condition, task)`` or, for short,
+    ``PickPlaceRun(condition, task)``; resume one with ``PickPlaceRun(task=task,
+    record=record)``. The clock is read from the run record: each demo's ``seconds``,
+    the robot tests asked for during the run, and ``other_seconds``.
     """
 
-    def __init__(self, condition: str, task: PickPlaceTask | None = None, session=None):
-        if condition not in CONDITIONS:
-            raise InvalidParameterError(
-                f"condition must be one of {', '.join(CONDITIONS)}, got {condition!r}"
-            )
-        self.task = PickPlaceTask() if task is None else task
-        self.condition = condition
-        if session is None:
-            session = TeachingSession(
-                self.task,
-                feedback=CONDITIONS[condition],
-                batch=self.task.scene.generalisation_indices if condition == "BF" else None,
-            )
-            session.meta.update(condition=condition, demo_seconds=[], tests=[], finished=False)
-        self.session = session
+    experiment = 2
+    conditions = CONDITIONS
+
+    def __init__(self, condition=None, task: PickPlaceTask | None = None, record=None, **new):
+        task = PickPlaceTask() if task is None else task
+        clock = new.pop("clock", utc_now)
+        if record is None:
+            record = self.fresh_record(condition, task, clock=clock, **new)
+        elif condition is not None and condition != record.condition:
+            raise InvalidParameterError(f"the record is a {record.condition} run, not {condition}")
+        super().__init__(task, record, clock)
+
+    @classmethod
+    def new(cls, condition, task, clock=utc_now, **options):
+        return cls(condition, task, clock=clock, **options)
+
+    @classmethod
+    def from_record(cls, task, record, clock=utc_now):
+        return cls(task=task, record=record, clock=clock)
+
+    def batch(self) -> np.ndarray:
+        return self.task.scene.generalisation_indices
 
     # ---------------------------------------------------------------- the clock
 
@@ -71,12 +75,11 @@ class PickPlaceRun:
 
         Also counts :meth:`spend` time and the time of demos taken back with :meth:`undo`.
         """
-        meta = self.session.meta
+        a = self.attempt
         shown = sum(len(r.shown) for r in self.session.history)
-        tested = sum(len(t["plants"]) for t in meta["tests"] if not t["after_run"])
-        other = float(meta.get("other_seconds", 0.0))
+        tested = sum(len(t.plants) for t in a.tests if not t.after_run)
         robot = self.realisation_seconds * (shown + tested)
-        return float(sum(meta["demo_seconds"])) + robot + other
+        return float(sum(d.seconds or 0.0 for d in a.demos)) + robot + a.other_seconds
 
     @property
     def remaining(self) -> float:
@@ -84,28 +87,35 @@ class PickPlaceRun:
 
     @property
     def finished(self) -> bool:
-        return bool(self.session.meta["finished"]) or self.remaining <= 0
+        return super().finished or self.remaining <= 0
 
     def clock_text(self) -> str:
-        used, cap = self.elapsed, self.cap
+        used, cap = min(self.elapsed, self.cap), self.cap
         return f"{int(used // 60)}:{int(used % 60):02d} of {int(cap // 60)}:00 used"
 
-    # ---------------------------------------------------------------- teaching
-
-    def demonstrate(self, plant: int, raw=None, mistake=None, rng=None):
-        """Give one demonstration to ``plant`` (recorded, or generated kinesthetically)."""
+    def _check_open(self) -> None:
         if self.finished:
             raise RunOverError(
                 "this run is over (15 minutes used or finished): start the next run to go on"
             )
+
+    # ---------------------------------------------------------------- teaching
+
+    def demonstrate(self, plant: int, raw=None, mistake=None, rng=None, chosen_by: str = ""):
+        """Give one demonstration to ``plant`` (recorded, or generated kinesthetically)."""
+        self._check_open()
         plant = self._check_plant(plant)
         if raw is None:
             raw = self.task.demonstrate(plant, rng, mistake=mistake)
-        record = self.session.add_demo(raw, condition=self.task.conditions[plant])
-        self.session.meta["demo_seconds"].append(self.task.duration(raw))
-        return record
+        return self.add_demo(
+            raw,
+            condition=self.task.conditions[plant],
+            seconds=self.task.duration(raw),
+            chosen_by=chosen_by,
+            mistake=mistake or "",
+        )
 
-    def test(self, plants) -> np.ndarray:
+    def test(self, plants, after_run: bool | None = None) -> np.ndarray:
         """The robot tries ``plants``: SF during the run (25 s each), any condition after it.
 
         Returns the pass/fail of each tried plant (after the latest demo).
@@ -116,8 +126,7 @@ class PickPlaceRun:
             raise RunOverError(
                 f"in condition {self.condition} the robot can be tested only after the run"
             )
-        rec = self.session.latest
-        if rec is None:
+        if self.session.latest is None:
             raise InvalidParameterError("give a demonstration before testing the robot")
         cost = self.realisation_seconds * len(plants)
         if not after and cost > self.remaining:
@@ -125,45 +134,36 @@ class PickPlaceRun:
                 f"testing {len(plants)} plant(s) takes {cost:.0f} s but only "
                 f"{self.remaining:.0f} s are left"
             )
-        self.session.meta["tests"].append(
-            {"after_demo": rec.n_demos, "plants": plants, "after_run": after}
-        )
-        return rec.passed[plants]
+        return super().test(plants, after_run=after)
 
-    def finish(self) -> None:
-        self.session.meta["finished"] = True
-
-    def spend(self, seconds: float) -> None:
-        """Count time besides demos and realisations (e.g. choosing and setting a plant)."""
-        if not seconds >= 0:
-            raise InvalidParameterError(f"seconds must be >= 0, got {seconds}")
-        meta = self.session.meta
-        meta["other_seconds"] = float(meta.get("other_seconds", 0.0)) + float(seconds)
+    def finish(self, stopped: str | None = None) -> None:
+        """End the run ("time" when the 15 minutes are used up, else "finish")."""
+        if stopped is None:
+            stopped = "time" if self.remaining <= 0 else "finish"
+        super().finish(stopped)
 
     def undo(self):
         """Take back the latest demo; the time it and its realisations took stays spent.
 
         Returns the record now current (None when no demo is left).
         """
-        s = self.session
-        rec = s.latest
+        rec = self.session.latest
         if rec is None:
             raise InvalidParameterError("there is no demo to undo")
-        meta = s.meta
-        tests = [t for t in meta["tests"] if t["after_demo"] == rec.n_demos and not t["after_run"]]
-        spent = meta["demo_seconds"][-1] + self.realisation_seconds * (
-            len(rec.shown) + sum(len(t["plants"]) for t in tests)
+        a = self.attempt
+        tests = [t for t in a.tests if t.after_demo == rec.n_demos and not t.after_run]
+        spent = (a.demos[-1].seconds or 0.0) + self.realisation_seconds * (
+            len(rec.shown) + sum(len(t.plants) for t in tests)
         )
-        meta["tests"] = [t for t in meta["tests"] if t["after_demo"] < rec.n_demos]
-        meta["demo_seconds"] = meta["demo_seconds"][:-1]
-        self.spend(spent)
-        return s.undo()
+        return super().undo(spent_seconds=spent)
 
     def _check_plant(self, plant) -> int:
         n = len(self.task.conditions)
+        if isinstance(plant, bool):
+            raise InvalidParameterError(f"a plant is a number from 0 to {n - 1}, got {plant!r}")
         try:
             index = int(plant)
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, OverflowError) as exc:
             raise InvalidParameterError(f"a plant is a number from 0 to {n - 1}") from exc
         if not 0 <= index < n or index != plant:
             raise InvalidParameterError(f"a plant is a number from 0 to {n - 1}, got {plant!r}")
@@ -176,6 +176,6 @@ class PickPlaceRun:
         rec = self.session.latest
         if rec is None:
             return np.zeros(0, dtype=int)
-        tests = [t["plants"] for t in self.session.meta["tests"] if t["after_demo"] == rec.n_demos]
+        tests = [t.plants for t in self.attempt.tests if t.after_demo == rec.n_demos]
         extra = np.array([p for ps in tests for p in ps], dtype=int)
         return np.unique(np.r_[rec.shown, extra]).astype(int)

@@ -23,10 +23,10 @@ import dataclasses
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..framework import TeachingSession
 from ..tasks.maze import MazeTask
 from ..tasks.maze_rules import advise_from, followed
-from .model import TeacherModel
+from ..tasks.maze_run import MazeRun
+from .model import SIMULATED, TeacherModel, simulated_clock
 from .traits import TeacherTraits
 
 __all__ = ["MazeTeacher", "MAZE_CONDITIONS", "SLIP_SHIFTS"]
@@ -68,13 +68,14 @@ class MazeTeacher:
         xy = path[:, 1:] + tremor * np.sin(np.pi * s)[:, None]
         return np.column_stack([s * duration, xy])
 
-    def teach(self, condition: str, rng) -> TeachingSession:
-        """Teach one run under ``condition``; returns the session (``meta`` tells the story).
+    def teach(self, condition: str, rng) -> MazeRun:
+        """Teach one run under ``condition``; returns the finished run.
 
-        ``session.meta`` holds ``condition``, ``why_stopped`` ("satisfied" or
-        "patience"), ``targets`` (how each demo's start was chosen: "plan", "red",
-        "rule 0".."rule 3"), ``slips`` and, in VR, ``followed_rules``. Maze teachers
-        never take a demo back (the paper's maze protocol has no undo).
+        Its record tells the story: each demo's ``chosen_by`` (how its start was chosen:
+        "plan", "red", "rule 0".."rule 3"), ``mistake`` ("slip" when the hand slipped)
+        and, in VR, ``followed_rule``; the attempt's ``stopped`` is "satisfied" or
+        "patience". Maze teachers never take a demo back (the paper's maze protocol has
+        no undo).
         """
         if condition not in MAZE_CONDITIONS:
             raise InvalidParameterError(
@@ -86,12 +87,12 @@ class MazeTeacher:
         lower = np.array([zone.x0 + margin, zone.y0 + margin])
         upper = np.array([zone.x1 - margin, zone.y1 - margin])
         model = TeacherModel(t, rng, task.conditions, lower, upper, "maze")
-        session = TeachingSession(task, feedback=MAZE_CONDITIONS[condition])
-        meta = session.meta
-        meta.update(condition=condition, targets=[], slips=0, followed_rules=[])
+        run = MazeRun.new(condition, task, trainee=SIMULATED, clock=simulated_clock)
+        session = run.session
         first_start = None
         while True:
             m = session.n_demos
+            advice = None
             if condition == "VR":
                 rec = session.latest
                 advice = advise_from(task, None if rec is None else rec.passed, first_start)
@@ -99,24 +100,25 @@ class MazeTeacher:
             else:
                 start, why = model.next_target(avoid=np.flatnonzero(model.belief.demonstrated))
             slip = model.slips()
-            record = session.add_demo(self.stroke(start, rng, slip))
-            meta["targets"].append(why)
-            meta["slips"] += int(slip)
-            if condition == "VR":
-                meta["followed_rules"].append(followed(advice, start))
+            record = run.add_demo(
+                self.stroke(start, rng, slip),
+                followed_rule=None if advice is None else followed(advice, start),
+                chosen_by=why,
+                mistake="slip" if slip else "",
+            )
+            session = run.session
             if first_start is None:
                 first_start = np.asarray(start, float)
             own = task.nearest_condition(start)
             model.belief.demonstrate(own)
             model.belief.observe(record.shown, record.passed[record.shown])
             if model.satisfied(m + 1):
-                meta["why_stopped"] = "satisfied"
+                run.finish("satisfied")
                 break
             if session.n_demos >= t.patience:
-                meta["why_stopped"] = "patience"
+                run.finish("patience")
                 break
-        meta["finished"] = True
-        return session
+        return run
 
     @staticmethod
     def _follow(model: TeacherModel, advice):

@@ -46,9 +46,18 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import Delaunay, QhullError
 
+from ..framework.record import Trainee
 from .traits import TeacherTraits
 
-__all__ = ["Belief", "TeacherModel", "NEAR", "CLUSTER"]
+__all__ = ["Belief", "TeacherModel", "NEAR", "CLUSTER", "SIMULATED", "simulated_clock"]
+
+#: who teaches a simulated run (its record names no person)
+SIMULATED = Trainee("simulated teacher", "simulated")
+
+
+def simulated_clock() -> str:
+    """The stamp of every event of a simulated run: fixed, so a seed gives the same record."""
+    return "2000-01-01T00:00:00.000Z"
 
 #: a success (failure) seen at one condition is believed to hold this close to it
 #: (fraction of the width of B^: 2.3 cm in the maze, about one plant in the tray)

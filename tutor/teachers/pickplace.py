@@ -32,7 +32,7 @@ import numpy as np
 from ..errors import InvalidParameterError
 from ..tasks.pickplace import PickPlaceTask
 from ..tasks.pickplace_protocol import CONDITIONS, PickPlaceRun
-from .model import TeacherModel
+from .model import SIMULATED, TeacherModel, simulated_clock
 from .traits import TeacherTraits
 
 __all__ = ["PickPlaceTeacher", "PICKPLACE_CONDITIONS", "NOVICE_TEST_NEAR", "MAX_RETRIES"]
@@ -81,9 +81,10 @@ class PickPlaceTeacher:
     def teach(self, condition: str, rng, run: PickPlaceRun | None = None) -> PickPlaceRun:
         """Teach one 15-minute run under ``condition``; returns the finished run.
 
-        ``run.session.meta`` gains ``targets`` (why each plant was chosen: "plan",
-        "red", "retry"), ``slips``, ``retries`` and ``why_stopped`` ("satisfied",
-        "patience" or "time").
+        Its record tells the story: each demo's ``chosen_by`` (why the plant was chosen:
+        "plan", "red", "retry") and ``mistake`` ("wrong_plant" when the hand slipped), the
+        undo events (retries) and the attempt's ``stopped`` ("satisfied", "patience" or
+        "time").
         """
         if condition not in CONDITIONS:
             raise InvalidParameterError(
@@ -92,11 +93,10 @@ class PickPlaceTeacher:
             )
         rng = np.random.default_rng(rng)
         t = self.traits
-        run = PickPlaceRun(condition, self.task) if run is None else run
+        if run is None:
+            run = PickPlaceRun(condition, self.task, trainee=SIMULATED, clock=simulated_clock)
         model = self._model(rng)
         model.lessons = list(self.lessons)
-        meta = run.session.meta
-        meta.update(targets=[], slips=0, retries=0)
         retry, tries = None, 0
         why_stopped = "time"
         while not run.finished:
@@ -110,9 +110,12 @@ class PickPlaceTeacher:
             if run.finished:
                 break
             slip = model.slips()
-            record = run.demonstrate(plant, raw=self.demonstration(plant, rng, slip))
-            meta["targets"].append(why)
-            meta["slips"] += int(slip)
+            record = run.demonstrate(
+                plant,
+                raw=self.demonstration(plant, rng, slip),
+                chosen_by=why,
+                mistake="wrong_plant" if slip else None,
+            )
             model.belief.demonstrate(plant)
             model.belief.observe(record.shown, record.passed[record.shown])
             fresh = set(record.shown.tolist())
@@ -124,9 +127,7 @@ class PickPlaceTeacher:
             failed = model.belief.seen[plant] == 0
             if plant in fresh and (failed or noticed) and tries < MAX_RETRIES:
                 run.undo()
-                meta["targets"].pop()
                 model.belief.demonstrated[plant] = False
-                meta["retries"] += 1
                 retry, tries = plant, tries + 1
                 continue
             retry, tries = None, 0
@@ -136,13 +137,11 @@ class PickPlaceTeacher:
             if run.session.n_demos >= t.patience:
                 why_stopped = "patience"
                 break
-        meta["why_stopped"] = why_stopped
-        run.finish()
+        run.finish(why_stopped)
         if condition == "NF" and run.session.n_demos:
             # NF: self-chosen realisations only after the run (chosen as novices do)
             self._self_test(run, model, rng, always=True)
         self.lessons = list(model.belief.failures_seen)
-        meta["lessons"] = list(self.lessons)
         return run
 
     def _self_test(self, run: PickPlaceRun, model: TeacherModel, rng, always=False) -> set[int]:

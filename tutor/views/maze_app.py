@@ -8,74 +8,85 @@ VF  visual feedback: R^ (green/red) after every demonstration.
 VR  visual feedback and the paper's three rules: the tutor marks the 4 cm circle where
     the rules say the next demo should start and says whether the last one followed them.
 
-Every completed demonstration is saved at once (atomically) to the run's session file,
-so a crashed or restarted kernel resumes where the trainee was.
+Every completed demonstration is saved at once (atomically) to the run's file, so a
+crashed or restarted kernel resumes where the trainee was; resuming, the file lock,
+loading, undo, reset and finish are shared with the pick-and-place tutor
+(:mod:`tutor.views.app`).
 """
 
 from __future__ import annotations
 
 import html
-from pathlib import Path
 
 import ipywidgets as w
 import numpy as np
 
-from ..demofiles import load_demos
-from ..errors import InvalidFileError, TutorError
-from ..framework import TeachingSession
+from ..errors import TutorError
+from ..paper import PAPER_MEDIAN_ETA
 from ..runtime import headless
 from ..tasks.maze import MazeTask
-from ..tasks.maze_rules import advise, followed
+from ..tasks.maze_run import CONDITIONS, MazeRun
+from .app import TutorApp, guarded
 from .sketchpad import Sketchpad, layout_spec
 from .text import session_report, summary
-from .uploads import on_upload
 
 __all__ = ["MazeTutor", "CONDITIONS", "PAPER_MEDIAN_ETA", "compare_runs", "plot_runs"]
 
-CONDITIONS = {"NF": "none", "VF": "all", "VR": "all"}
-PAPER_MEDIAN_ETA = {"NF": 0.076, "VF": 0.134, "VR": 0.14}
 
-
-class MazeTutor:
+class MazeTutor(TutorApp):
     """Sketchpad, live panel and buttons for one run.
 
     Parameters
     ----------
     condition : {"NF", "VF", "VR"}
     session_file : path, optional
-        Where the run autosaves; an existing file is resumed.
+        Where the run autosaves; an existing file of the same run is resumed.
     task : MazeTask, optional
     width_px : int
         Width of the drawing area in pixels.
+    trainee : str, optional
+        The trainee's name (default ``JUPYTERHUB_USER`` on a hub, else "trainee").
+    practice : bool
+        Mark the run as practice (the class analysis leaves it out).
     """
 
-    def __init__(self, condition: str = "VF", session_file=None, task=None, width_px: int = 360):
-        if condition not in CONDITIONS:
-            raise TutorError(f"condition must be one of {', '.join(CONDITIONS)}, got {condition!r}")
-        self.task = MazeTask() if task is None else task
-        self.condition = condition
-        self.session_file = None if session_file is None else Path(session_file)
-        self.message = ""
-        self._autosave_ok = True
-        self.session = self._resume()
+    demo_columns = ("t", "x", "y")
 
+    def __init__(
+        self,
+        condition: str = "VF",
+        session_file=None,
+        task=None,
+        width_px: int = 360,
+        trainee=None,
+        practice: bool = False,
+    ):
+        task = MazeTask() if task is None else task
+        super().__init__(MazeRun, condition, task, session_file, trainee, practice=practice)
         self.pad = Sketchpad(layout=layout_spec(self.task.layout), width_px=width_px)
         self.panel = w.HTML(layout=w.Layout(width="380px"))
         self.buttons = {
             name: w.Button(description=name, layout=w.Layout(width="86px"))
             for name in ("Undo", "Reset", "Save", "Finish")
         }
-        self.upload = w.FileUpload(accept=".json,.csv", multiple=False, description="Load")
+        self.buttons["Reset"].tooltip = "Start a new attempt (asks to confirm; nothing is deleted)"
         self.buttons["Undo"].on_click(lambda _: self.undo())
-        self.buttons["Reset"].on_click(lambda _: self.reset())
+        self.buttons["Reset"].on_click(lambda _: self.request_reset())
         self.buttons["Save"].on_click(lambda _: self.save())
         self.buttons["Finish"].on_click(lambda _: self.finish())
-        self.upload.observe(on_upload(self.load), names="value")
+        self._common_widgets()
         self.pad.observe(self._on_stroke, names="stroke_count")
         self.widget = w.HBox(
             [
                 self.pad,
-                w.VBox([w.HBox([*self.buttons.values(), self.upload]), self.panel]),
+                w.VBox(
+                    [
+                        w.HBox([*self.buttons.values(), self.upload]),
+                        w.HBox([self.attempts, self.bring_back]),
+                        self.panel,
+                        self.status,
+                    ]
+                ),
             ]
         )
         self.widget.add_class("lfd-maze-tutor")
@@ -84,65 +95,36 @@ class MazeTutor:
     # ---------------------------------------------------------------- state
 
     @property
-    def finished(self) -> bool:
-        return bool(self.session.meta.get("finished", False))
-
-    @property
     def compliance(self) -> list[bool]:
         """VR: whether each demo followed the rules in force when it was given."""
-        return list(self.session.meta.get("followed_rules", []))
-
-    def _new_session(self) -> TeachingSession:
-        s = TeachingSession(self.task, feedback=CONDITIONS[self.condition])
-        s.meta.update(condition=self.condition, finished=False, followed_rules=[])
-        return s
-
-    def _resume(self) -> TeachingSession:
-        path = self.session_file
-        if path is None or not path.exists():
-            return self._new_session()
-        try:
-            session = TeachingSession.load(path, self.task)
-        except InvalidFileError as exc:
-            self._autosave_ok = False  # never overwrite a file we could not read
-            self.message = (
-                f"Could not resume from {path.name}: {exc}. Starting afresh; this run will not "
-                "be saved over that file (use Save after choosing another file)."
-            )
-            return self._new_session()
-        if session.meta.get("condition", self.condition) != self.condition:
-            self._autosave_ok = False
-            self.message = (
-                f"{path.name} holds a {session.meta.get('condition')} run, not {self.condition}; "
-                "starting afresh without touching it."
-            )
-            return self._new_session()
-        self.message = f"Resumed {session.n_demos} demonstration(s) from {path.name}."
-        return session
+        return self.run.compliance
 
     # ---------------------------------------------------------------- actions
 
     def _on_stroke(self, change) -> None:
         self.add(np.asarray(self.pad.stroke, dtype=float))
 
+    @guarded
     def add(self, raw) -> None:
         """Add one demonstration (what a finished stroke does)."""
-        if self.finished:
-            self.message = "This run is finished; press Reset to teach again."
-            self.refresh()
+        if self._refuse_if_read_only():
             return
-        advice = advise(self.task, self.session) if self.condition == "VR" else None
+        if self.finished:
+            self.message = (
+                "This run is finished, so that stroke was not used. Press Reset to teach "
+                "again (this run is kept)."
+            )
+            return
+        advice = self.run.advice() if self.condition == "VR" else None
         try:
-            record = self.session.add_demo(raw)
+            record = self.run.add_demo(raw)
         except TutorError as exc:
             self.message = f"That stroke was not used: {exc}"
-            self.refresh()
             return
         self.message = ""
         if advice is not None:
             start = self.task.condition_of(self.session.demos[-1])
-            ok = followed(advice, start)
-            self.session.meta["followed_rules"] = [*self.compliance, ok]
+            ok = self.run.attempt.demos[-1].followed_rule
             if advice.rule == 0:
                 self.message = (
                     f"Every start point already succeeded before demo {record.n_demos}: "
@@ -157,84 +139,19 @@ class MazeTutor:
             else:
                 self.message = f"Demo {record.n_demos} followed rule {advice.rule}."
         self._autosave()
-        self.refresh()
 
-    def undo(self) -> None:
-        if self.session.n_demos == 0 or self.finished:
-            return
-        self.session.undo()
-        if self.condition == "VR":
-            self.session.meta["followed_rules"] = self.compliance[: self.session.n_demos]
-        self.message = ""
-        self._autosave()
-        self.refresh()
-
-    def reset(self) -> None:
-        self.session = self._new_session()
-        self.message = "Started again."
-        self._autosave()
-        self.refresh()
-
-    def finish(self) -> None:
-        """End the run: NF reveals the picture; every condition shows the paper's score."""
-        if self.session.n_demos == 0:
-            self.message = "Give at least one demonstration before finishing."
-        else:
-            self.session.meta["finished"] = True
-            self.message = ""
-            self._autosave()
-        self.refresh()
-
-    def save(self, path=None) -> Path | None:
-        """Save the run (to ``session_file`` by default); returns the path written."""
-        path = Path(path) if path is not None else self.session_file
-        if path is None:
-            path = Path("sessions") / f"maze_{self.condition}.json"
-            self.session_file = path
-        self.session.save(path)
-        self._autosave_ok = True
-        self.message = f"Saved to {path}."
-        self.refresh()
-        return path
-
-    def load(self, path) -> None:
-        """Load a session file, or add the demos of a demonstration file (JSON/CSV)."""
-        path = Path(path)
-        try:
-            if path.suffix.lower() == ".json" and '"lfd-tutor-session"' in path.read_text()[:200]:
-                self.session = TeachingSession.load(path, self.task)
-                self.message = f"Loaded {self.session.n_demos} demonstration(s)."
-            else:
-                demos = load_demos(path)
-                trial = TeachingSession.from_dict(self.session.to_dict(), self.task)
-                for i, demo in enumerate(demos, start=1):
-                    try:
-                        trial.add_demo(demo)
-                    except TutorError as exc:
-                        raise InvalidFileError(f"demo {i} of {path.name}: {exc}") from exc
-                trial.meta = self.session.meta
-                self.session = trial
-                self.message = f"Added {len(demos)} demonstration(s) from {path.name}."
-        except (InvalidFileError, OSError, UnicodeDecodeError) as exc:
-            self.message = f"Nothing was loaded: {exc}"
-            self.refresh()
-            return
-        self._autosave()
-        self.refresh()
-
-    def _autosave(self) -> None:
-        if self.session_file is not None and self._autosave_ok:
-            self.session.save(self.session_file)
+    def _undo_message(self) -> str:
+        return ""
 
     # ---------------------------------------------------------------- display
 
     def refresh(self) -> None:
-        """Redraw the sketchpad and the panel from the session."""
+        """Redraw the sketchpad and the panel from the run."""
         s, rec = self.session, self.session.latest
         reveal = self.condition != "NF" or self.finished
         rule = None
         if self.condition == "VR" and not self.finished:
-            advice = advise(self.task, s)
+            advice = self.run.advice()
             if advice.center is not None:
                 rule = {"center": advice.center.tolist(), "radius": advice.radius}
         if rec is None or not reveal:
@@ -243,8 +160,11 @@ class MazeTutor:
         else:
             shown = np.arange(len(rec.passed)) if self.finished else rec.shown
             self.pad.show(s.demos, s.realisations, rec.passed, shown, rule)
-        self.pad.enabled = not self.finished
+        self.pad.enabled = not self.finished and not self.read_only
+        for name in ("Undo", "Reset", "Finish", "Save"):
+            self.buttons[name].disabled = self.read_only
         self.panel.value = self._panel_html(reveal)
+        self._refresh_common()
 
     def _panel_html(self, reveal: bool) -> str:
         s, rec = self.session, self.session.latest
@@ -260,8 +180,8 @@ class MazeTutor:
                 "<ul>" + "".join(f"<li>{html.escape(x[2:])}</li>" for x in lines) + "</ul>"
             )
         if self.condition == "VR" and not self.finished:
-            parts.append(f"<div><i>{html.escape(advise(self.task, s).message)}</i></div>")
-        if self.finished:
+            parts.append(f"<div><i>{html.escape(self.run.advice().message)}</i></div>")
+        if self.finished and s.n_demos:
             score = s.score()
             parts.append(
                 f"<div class='lfd-score'><b>Finished.</b> {html.escape(session_report(s))} "
@@ -269,8 +189,7 @@ class MazeTutor:
                 f"{PAPER_MEDIAN_ETA[self.condition]:.1%}; you used {score.n_demos} "
                 "demonstration(s) to get there)</div>"
             )
-        if self.message:
-            parts.append(f"<div class='lfd-message'>{html.escape(self.message)}</div>")
+        parts.append(self.message_html())
         return "".join(parts)
 
     def autoplay(self, demos, finish: bool = True) -> None:
@@ -285,11 +204,6 @@ class MazeTutor:
             self.pad.draw(demo)
         if finish:
             self.finish()
-
-    def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
 
 
 def compare_runs(tutors) -> str:

@@ -13,28 +13,22 @@ grey, not shown to the trainee (yet).
 
 from __future__ import annotations
 
-import copy
 import html
-from pathlib import Path
 
 import ipywidgets as w
 import numpy as np
 
-from ..demofiles import load_demos
 from ..errors import InvalidFileError, TutorError
-from ..fileio import read_json
-from ..framework import TeachingSession
+from ..paper import PAPER_MEAN_ETA, PAPER_THIRD_RUN_ETA
 from ..runtime import headless
 from ..tasks.pickplace import PickPlaceTask
 from ..tasks.pickplace_protocol import PickPlaceRun
+from .app import TutorApp, guarded
 from .style import DEMO, FAIL, PASS
 from .text import session_report, summary
-from .uploads import on_upload
 
 __all__ = ["PickPlaceTutor", "tray_status", "compare_runs", "PAPER_MEAN_ETA", "PAPER_THIRD_RUN_ETA"]
 
-#: the paper's mean eta over runs per condition (Experiment 2)
-PAPER_MEAN_ETA = {"NF": 0.1278, "RF": 0.1389, "BF": 0.2354, "SF": 0.1534}
 UNKNOWN = "#d0d0d0"
 MISTAKES = {"no mistake": None, "wrong plant": "wrong_plant", "sloppy grab": "sloppy_grab"}
 
@@ -51,29 +45,44 @@ def tray_status(run: PickPlaceRun, reveal: bool = False) -> np.ndarray:
     return status
 
 
-class PickPlaceTutor:
+class PickPlaceTutor(TutorApp):
     """Tray map, controls, clock and panel for one run (the 3-D view is optional).
 
     Parameters
     ----------
     condition : {"NF", "RF", "BF", "SF"}
     session_file : path, optional
-        Autosave after every demonstration; an existing file is resumed.
+        Autosave after every demonstration; an existing file of the same run is resumed.
     task : PickPlaceTask, optional
     scene3d : object with ``update(run, status)``, optional
         A 3-D view (e.g. :class:`tutor.views.scene3d.Scene3D`) refreshed after each step.
     seed : int, optional
         Seed of the simulated hand's variability.
+    trainee : str, optional
+        The trainee's name (default ``JUPYTERHUB_USER`` on a hub, else "trainee").
+    run : int
+        Which of the trainee's three runs this is (1, 2 or 3).
+    practice : bool
+        Mark the run as practice (the class analysis leaves it out).
     """
 
-    def __init__(self, condition="BF", session_file=None, task=None, scene3d=None, seed=None):
-        self.task = PickPlaceTask() if task is None else task
-        self.session_file = session_file
+    demo_columns = ("t", "x", "y", "z", "g")
+
+    def __init__(
+        self,
+        condition="BF",
+        session_file=None,
+        task=None,
+        scene3d=None,
+        seed=None,
+        trainee=None,
+        run: int = 1,
+        practice: bool = False,
+    ):
+        task = PickPlaceTask() if task is None else task
+        super().__init__(PickPlaceRun, condition, task, session_file, trainee, run, practice)
         self.scene3d = scene3d
         self.rng = np.random.default_rng(seed)
-        self.message = ""
-        self._autosave_ok = True
-        self.run = self._resume(condition)
         self.selected = 44
         rows, cols = self.task.scene.rows, self.task.scene.cols
         self.plant_buttons = [
@@ -100,29 +109,32 @@ class PickPlaceTutor:
         )
         self.buttons = {
             name: w.Button(description=name, layout=w.Layout(width="120px"))
-            for name in ("Demonstrate", "Test plant", "Undo", "Finish run")
+            for name in ("Demonstrate", "Test plant", "Undo", "Finish run", "Reset")
         }
+        self.buttons["Reset"].tooltip = "Start a new attempt (asks to confirm; nothing is deleted)"
         self.buttons["Demonstrate"].on_click(lambda _: self.demonstrate())
         self.buttons["Test plant"].on_click(lambda _: self.test())
         self.buttons["Undo"].on_click(lambda _: self.undo())
         self.buttons["Finish run"].on_click(lambda _: self.finish())
-        self.upload = w.FileUpload(
-            accept=".json,.csv",
-            multiple=False,
-            description="Load demos",
-            layout=w.Layout(width="120px"),
-        )
-        self.upload.observe(on_upload(self.load), names="value")
+        self.buttons["Reset"].on_click(lambda _: self.request_reset())
+        self._common_widgets()
         self.clock = w.HTML()
         self.panel = w.HTML(layout=w.Layout(width="420px"))
         controls = w.VBox(
             [
                 w.HBox([self.buttons["Demonstrate"], self.mistake, self.upload]),
                 w.HBox(
-                    [self.buttons["Test plant"], self.buttons["Undo"], self.buttons["Finish run"]]
+                    [
+                        self.buttons["Test plant"],
+                        self.buttons["Undo"],
+                        self.buttons["Finish run"],
+                        self.buttons["Reset"],
+                    ]
                 ),
+                w.HBox([self.attempts, self.bring_back]),
                 self.clock,
                 self.panel,
+                self.status,
             ]
         )
         self.widget = w.HBox(
@@ -134,113 +146,93 @@ class PickPlaceTutor:
         self.widget.add_class("lfd-pickplace-tutor")
         self.refresh()
 
-    # ---------------------------------------------------------------- state
-
-    def _resume(self, condition) -> PickPlaceRun:
-        path = self.session_file
-        if path is not None:
-            path = Path(path)
-            if path.exists():
-                try:
-                    data = read_json(path, "session file")
-                    session = TeachingSession.from_dict(data, self.task)
-                    if session.meta.get("condition") != condition:
-                        raise TutorError(f"it holds a {session.meta.get('condition')} run")
-                    self.message = f"Resumed {session.n_demos} demonstration(s) from {path.name}."
-                    return PickPlaceRun(condition, self.task, session)
-                except TutorError as exc:
-                    self._autosave_ok = False
-                    self.message = (
-                        f"Could not resume from {path.name}: {exc}. Starting afresh without "
-                        "touching that file."
-                    )
-        return PickPlaceRun(condition, self.task)
-
-    def _autosave(self):
-        if self.session_file is not None and self._autosave_ok:
-            self.run.session.save(self.session_file)
-
     # ---------------------------------------------------------------- actions
 
     def select(self, plant: int) -> None:
         self.selected = int(plant)
         self.refresh()
 
+    @guarded
     def demonstrate(self, plant=None, mistake=None) -> None:
         """Demonstrate to ``plant`` (default: the selected one)."""
-        plant = self.selected if plant is None else int(plant)
+        if self._refuse_if_read_only():
+            return
+        plant = self.selected if plant is None else plant
         mistake = MISTAKES[self.mistake.value] if mistake is None else mistake
         try:
             self.run.demonstrate(plant, mistake=mistake, rng=self.rng)
             self.message = ""
         except TutorError as exc:
             self.message = str(exc)
-        self._autosave()
-        self.refresh()
-
-    def test(self, plants=None) -> None:
-        plants = [self.selected] if plants is None else list(plants)
-        try:
-            ok = self.run.test(plants)
-            names = ", ".join(
-                f"{self.task.plant_name(p)}: {'success' if o else 'fails'}"
-                for p, o in zip(plants, ok, strict=True)
-            )
-            self.message = f"The robot tried {names}."
-        except TutorError as exc:
-            self.message = str(exc)
-        self._autosave()
-        self.refresh()
-
-    def undo(self) -> None:
-        """Take back the latest demo (the time it took stays spent, as on a real robot)."""
-        if self.run.session.n_demos and not self.run.finished:
-            self.run.undo()
-            self.message = "Took back the latest demonstration (its time stays used)."
-            self._autosave()
-        self.refresh()
-
-    def load(self, path) -> None:
-        """Add the demonstrations of a recorded file (JSON or CSV: t, x, y, z, g).
-
-        Each demo counts for the plant the file says it was meant for (``conditions``),
-        or else the plant nearest to where the hand closes. All or nothing: if one demo
-        is rejected, or the 15 minutes run out, the run is left as it was.
-        """
-        path = Path(path)
-        run = self.run
-        before = copy.deepcopy(run.session.to_dict())
-        try:
-            demos = load_demos(path)
-            if demos.columns and len(demos.columns) != 5:
-                raise InvalidFileError(
-                    f"{path.name} has columns {', '.join(demos.columns)}; a pick-and-place "
-                    "demonstration has 5: t, x, y, z, g (hand 0 open, 1 closed)"
-                )
-            for i, (raw, meant) in enumerate(zip(demos, demos.conditions, strict=True), 1):
-                try:
-                    plant = self.task.nearest_condition(
-                        self.task.condition_of(self.task.preprocess(raw))
-                        if meant is None
-                        else meant
-                    )
-                    run.demonstrate(plant, raw=raw)
-                except TutorError as exc:
-                    raise InvalidFileError(f"demo {i} of {path.name}: {exc}") from exc
-            self.message = f"Added {len(demos)} demonstration(s) from {path.name}."
-        except (InvalidFileError, OSError, UnicodeDecodeError) as exc:
-            session = TeachingSession.from_dict(before, self.task)
-            self.run = PickPlaceRun(run.condition, self.task, session)
-            self.message = f"Nothing was loaded: {exc}"
-            self.refresh()
             return
         self._autosave()
-        self.refresh()
 
-    def finish(self) -> None:
-        self.run.finish()
+    @guarded
+    def test(self, plants=None) -> None:
+        if self._refuse_if_read_only():
+            return
+        plants = [self.selected] if plants is None else list(plants)
+        ok = self.run.test(plants)
+        names = ", ".join(
+            f"{self.task.plant_name(p)}: {'success' if o else 'fails'}"
+            for p, o in zip(plants, ok, strict=True)
+        )
+        self.message = f"The robot tried {names}."
         self._autosave()
-        self.refresh()
+
+    def _undo_message(self) -> str:
+        return "Took back the latest demonstration (its time stays used; it stays in the history)."
+
+    @guarded
+    def finish(self) -> None:
+        if self._refuse_if_read_only():
+            return
+        self.run.finish()
+        self.message = ""
+        self._autosave()
+
+    def _load_items(self, demos, name: str):
+        """Each demo counts for the plant the file says it was meant for (``conditions``),
+        or else the plant nearest to where the hand closes; a meant condition farther than
+        half a plant pitch from every plant is refused."""
+        items = []
+        for i, (raw, meant) in enumerate(zip(demos, demos.conditions, strict=True), start=1):
+            try:
+                where = (
+                    self.task.condition_of(self.task.preprocess(raw)) if meant is None else meant
+                )
+                plant = self._plant_at(where, meant is not None)
+            except TutorError as exc:
+                raise InvalidFileError(f"demo {i} of {name}: {exc}") from exc
+            items.append(
+                (
+                    raw,
+                    {
+                        "condition": self.task.conditions[plant],
+                        "seconds": self.task.duration(raw),
+                    },
+                )
+            )
+        total = sum(o["seconds"] for _, o in items)
+        if total > self.run.remaining:
+            raise InvalidFileError(
+                f"the {len(items)} demonstration(s) in {name} take {total:.0f} s, but only "
+                f"{self.run.remaining:.0f} s of this run are left"
+            )
+        return items
+
+    def _plant_at(self, where, meant: bool) -> int:
+        plant = int(self.task.nearest_condition(where))
+        if meant:
+            gap = float(np.linalg.norm(np.asarray(where)[:2] - self.task.conditions[plant][:2]))
+            pitch = float(self.task.scene.pitch)
+            if gap > pitch / 2:
+                raise InvalidFileError(
+                    f"its condition {np.round(np.asarray(where, float), 3).tolist()} is "
+                    f"{100 * gap:.1f} cm from the nearest plant; a plant's grasp point is "
+                    "within half a plant spacing (positions in metres)"
+                )
+        return plant
 
     def autoplay(self, plants, mistakes=None) -> None:
         """Headless runs only (TUTOR_HEADLESS=1): demonstrate ``plants`` then finish."""
@@ -263,12 +255,15 @@ class PickPlaceTutor:
             b.style.button_color = colours[status[i]]
             b.description = "●" if i == self.selected else ""
         sf_or_after = run.condition == "SF" or run.finished
-        self.buttons["Test plant"].disabled = not sf_or_after or rec is None
+        self.buttons["Test plant"].disabled = not sf_or_after or rec is None or self.read_only
         for name in ("Demonstrate", "Undo"):
-            self.buttons[name].disabled = run.finished
+            self.buttons[name].disabled = run.finished or self.read_only
+        for name in ("Finish run", "Reset"):
+            self.buttons[name].disabled = self.read_only
         self.clock.value = f"<b>Time</b>: {run.clock_text()}"
         parts = [
-            f"<b>Condition {run.condition}</b> &middot; demonstrations: {run.session.n_demos}"
+            f"<b>Condition {run.condition}</b> &middot; run {self.record.run} &middot; "
+            f"demonstrations: {run.session.n_demos}"
             f" &middot; selected: {self.task.plant_name(self.selected)}"
         ]
         if rec is not None and (run.finished or run.condition != "NF"):
@@ -281,20 +276,11 @@ class PickPlaceTutor:
                 f"<div class='lfd-score'><b>Run over.</b> {report}"
                 f" (paper's mean for {run.condition}: {PAPER_MEAN_ETA[run.condition]:.1%})</div>"
             )
-        if self.message:
-            parts.append(f"<div class='lfd-message'>{html.escape(self.message)}</div>")
+        parts.append(self.message_html())
         self.panel.value = "".join(parts)
+        self._refresh_common()
         if self.scene3d is not None:
             self.scene3d.update(run, status)
-
-    def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
-
-
-#: the paper's mean eta in the third run (Experiment 2)
-PAPER_THIRD_RUN_ETA = {"NF": 0.1135, "RF": 0.1194, "BF": 0.2704, "SF": 0.137}
 
 
 def compare_runs(tutors) -> str:

@@ -1,0 +1,566 @@
+r"""The run record: everything one teaching run holds, typed and versioned.
+
+A *run* is one trainee teaching one task under one feedback condition (Sena & Howard,
+"Experiment 1" and "Experiment 2"). Its record is what is saved, resumed, collected by
+an educator and read back by the class analysis. It holds:
+
+- who taught (:class:`Trainee`: the display name and the folder key derived from it),
+  the experiment, the task, the condition and the run number (Experiment 2 has three);
+- every *attempt*: Reset, or a Load that replaces the run, starts a new attempt and
+  keeps the old one, so nothing a trainee did is ever deleted (:class:`Attempt`);
+- in each attempt the demonstration set :math:`b` in order (:class:`Demo`: the samples,
+  the condition it was meant for, what the trainee asked to see (SF), its cost on the
+  Experiment 2 clock, whether it followed VR's rule), the robot tests asked for
+  (:class:`Test`), other clock time and the finished flag;
+- every event in order (:class:`Event`: add, undo, load, reset, test, finish, ...), with a
+  wall-clock stamp;
+- whether it was a practice run (the class analysis leaves those out) and the version
+  of the tool that wrote it.
+
+The record is immutable (frozen dataclasses of tuples): a change makes a new record with
+:func:`dataclasses.replace`, so an old value can be kept while a new one is tried (all or
+nothing). :meth:`RunRecord.to_dict` and :meth:`RunRecord.from_dict` are the one way to
+and from JSON; ``run_record.schema.json`` beside this module publishes the same format
+as a JSON Schema, and the tests hold the two in agreement.
+
+The learner's state (:math:`\lambda`, :math:`\hat R` and the feedback after each demo) is
+not stored: it is recomputed by replaying the demos (:mod:`tutor.framework.run`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from datetime import UTC, datetime
+
+from ..errors import InvalidFileError
+from ..runtime import default_trainee, normalise_name, trainee_key
+
+__all__ = [
+    "RECORD_FORMAT",
+    "RECORD_VERSION",
+    "SUPPORTED_VERSIONS",
+    "EVENT_KINDS",
+    "Trainee",
+    "Demo",
+    "Test",
+    "Event",
+    "Attempt",
+    "RunRecord",
+    "utc_now",
+    "tool_version",
+]
+
+RECORD_FORMAT = "lfd-tutor-run"
+RECORD_VERSION = 1
+SUPPORTED_VERSIONS = (1,)
+
+#: what a trainee (or the tutor on their behalf) can do in a run
+EVENT_KINDS = (
+    "start",  # the run (or a new attempt) began
+    "add",  # a demonstration was added
+    "undo",  # the latest demonstration was taken back
+    "load",  # demonstrations came from a file
+    "reset",  # a new, empty attempt replaced the current one (the old one is kept)
+    "restore",  # an earlier attempt was brought back as a new attempt
+    "test",  # the robot tried chosen test conditions
+    "spend",  # clock time besides demos and robot attempts (Experiment 2)
+    "finish",  # the trainee ended the run
+)
+#: why an attempt ended
+END_REASONS = ("", "reset", "load", "restore")
+
+
+def utc_now() -> str:
+    """The wall clock as an ISO 8601 UTC stamp, e.g. ``2026-12-01T09:14:03.123Z``."""
+    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-3] + "Z"
+
+
+def tool_version() -> str:
+    from .. import __version__
+
+    return __version__
+
+
+# ---------------------------------------------------------------- checks of loaded values
+
+
+def _where(path: str) -> str:
+    return f"run record, {path}" if path else "run record"
+
+
+def _fail(path: str, what: str):
+    raise InvalidFileError(
+        f"{_where(path)}: {what}. The file may have been edited by hand or written by "
+        "another program; open the original file or start a new run."
+    )
+
+
+def _obj(data, path: str, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict:
+    if not isinstance(data, dict):
+        _fail(path, f"must be an object, got {type(data).__name__}")
+    missing = [k for k in required if k not in data]
+    if missing:
+        _fail(path, f"has no {', '.join(repr(k) for k in missing)}")
+    unknown = sorted(set(data) - set(required) - set(optional))
+    if unknown:
+        _fail(path, f"has unknown entries {', '.join(repr(k) for k in unknown)}")
+    return data
+
+
+def _str(value, path: str, choices=None) -> str:
+    if not isinstance(value, str):
+        _fail(path, f"must be text, got {type(value).__name__}")
+    if choices is not None and value not in choices:
+        _fail(path, f"must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
+    return value
+
+
+def _bool(value, path: str) -> bool:
+    if not isinstance(value, bool):
+        _fail(path, f"must be true or false, got {value!r}")
+    return value
+
+
+def _int(value, path: str, low: int = 0) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < low:
+        _fail(path, f"must be a whole number >= {low}, got {value!r}")
+    return value
+
+
+def _num(value, path: str, low: float | None = None) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        _fail(path, f"must be a number, got {type(value).__name__}")
+    try:
+        value = float(value)
+    except OverflowError:
+        _fail(path, "is a number too large for the tutor")
+    if not math.isfinite(value) or (low is not None and value < low):
+        bound = "" if low is None else f" >= {low:g}"
+        _fail(path, f"must be a finite number{bound}, got {value!r}")
+    return value
+
+
+def _list(value, path: str) -> list:
+    if not isinstance(value, list):
+        _fail(path, f"must be a list, got {type(value).__name__}")
+    return value
+
+
+def _numbers(value, path: str) -> tuple[float, ...]:
+    return tuple(_num(v, f"{path}[{i}]") for i, v in enumerate(_list(value, path)))
+
+
+def _indices(value, path: str) -> tuple[int, ...]:
+    return tuple(_int(v, f"{path}[{i}]") for i, v in enumerate(_list(value, path)))
+
+
+def _stamp(value, path: str) -> str:
+    text = _str(value, path)
+    try:
+        datetime.fromisoformat(text.replace("Z", "+00:00"))
+    except ValueError:
+        _fail(path, f"must be a date and time like 2026-12-01T09:14:03.123Z, got {text!r}")
+    return text
+
+
+def record_start(attempts: list):
+    """When a record without a ``created`` stamp began: its first attempt's start."""
+    first = attempts[0] if attempts else None
+    return first.get("started") if isinstance(first, dict) else None
+
+
+# ---------------------------------------------------------------- the record's parts
+
+
+@dataclass(frozen=True)
+class Trainee:
+    """Who taught: the name as typed (NFC-normalised) and the folder key derived from it."""
+
+    name: str
+    key: str
+
+    @classmethod
+    def from_name(cls, name=None) -> Trainee:
+        """The trainee called ``name`` (default: ``JUPYTERHUB_USER`` on a hub, else
+        "trainee"), with the folder key :func:`tutor.runtime.trainee_key` derives."""
+        text = normalise_name(default_trainee() if name is None else name)
+        return cls(text, trainee_key(text))
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "key": self.key}
+
+    @classmethod
+    def from_dict(cls, data, path: str = "trainee") -> Trainee:
+        d = _obj(data, path, ("name", "key"))
+        return cls(_str(d["name"], f"{path}.name"), _str(d["key"], f"{path}.key"))
+
+
+@dataclass(frozen=True)
+class Demo:
+    """One demonstration of the set :math:`b`.
+
+    Attributes
+    ----------
+    samples : tuple of tuple of float
+        The demonstration as the task preprocessed it, one row per sample (time first).
+    condition : tuple of float or None
+        The test condition it was meant for (e.g. the plant chosen); None when the task
+        reads it off the demo.
+    shown : tuple of int or None
+        SF: the test conditions the trainee asked to see after it; None otherwise.
+    seconds : float or None
+        Experiment 2: what the demo cost on the clock (its duration).
+    followed_rule : bool or None
+        VR: whether it followed the rule in force when it was given.
+    chosen_by : str
+        Simulated teachers: why this condition was chosen ("plan", "red", "rule 2", ...).
+    mistake : str
+        A mistake made on purpose or by a simulated hand ("wrong_plant", "sloppy_grab",
+        "slip"); "" for none.
+    """
+
+    samples: tuple[tuple[float, ...], ...]
+    condition: tuple[float, ...] | None = None
+    shown: tuple[int, ...] | None = None
+    seconds: float | None = None
+    followed_rule: bool | None = None
+    chosen_by: str = ""
+    mistake: str = ""
+
+    def to_dict(self) -> dict:
+        return {
+            "samples": [list(r) for r in self.samples],
+            "condition": None if self.condition is None else list(self.condition),
+            "shown": None if self.shown is None else list(self.shown),
+            "seconds": self.seconds,
+            "followed_rule": self.followed_rule,
+            "chosen_by": self.chosen_by,
+            "mistake": self.mistake,
+        }
+
+    @classmethod
+    def from_dict(cls, data, path: str) -> Demo:
+        d = _obj(
+            data,
+            path,
+            ("samples",),
+            ("condition", "shown", "seconds", "followed_rule", "chosen_by", "mistake"),
+        )
+        rows = _list(d["samples"], f"{path}.samples")
+        samples = tuple(_numbers(r, f"{path}.samples[{i}]") for i, r in enumerate(rows))
+        if not samples or len({len(r) for r in samples}) != 1 or not samples[0]:
+            _fail(f"{path}.samples", "must be a table of numbers with the same columns in each row")
+        cond = d.get("condition")
+        shown = d.get("shown")
+        seconds = d.get("seconds")
+        rule = d.get("followed_rule")
+        return cls(
+            samples=samples,
+            condition=None if cond is None else _numbers(cond, f"{path}.condition"),
+            shown=None if shown is None else _indices(shown, f"{path}.shown"),
+            seconds=None if seconds is None else _num(seconds, f"{path}.seconds", 0.0),
+            followed_rule=None if rule is None else _bool(rule, f"{path}.followed_rule"),
+            chosen_by=_str(d.get("chosen_by", ""), f"{path}.chosen_by"),
+            mistake=_str(d.get("mistake", ""), f"{path}.mistake"),
+        )
+
+
+@dataclass(frozen=True)
+class Test:
+    """The robot tried ``plants`` (indices into B^) after demo ``after_demo``."""
+
+    after_demo: int
+    plants: tuple[int, ...]
+    after_run: bool = False
+
+    def to_dict(self) -> dict:
+        return {
+            "after_demo": self.after_demo,
+            "plants": list(self.plants),
+            "after_run": self.after_run,
+        }
+
+    @classmethod
+    def from_dict(cls, data, path: str) -> Test:
+        d = _obj(data, path, ("after_demo", "plants"), ("after_run",))
+        return cls(
+            _int(d["after_demo"], f"{path}.after_demo"),
+            _indices(d["plants"], f"{path}.plants"),
+            _bool(d.get("after_run", False), f"{path}.after_run"),
+        )
+
+
+@dataclass(frozen=True)
+class Event:
+    """One thing that happened, stamped with the wall clock.
+
+    ``n_demos`` is the number of demos in the attempt after the event; ``attempt`` the
+    attempt it happened in (0-based); ``detail`` a short note (a file's name, a number).
+    """
+
+    kind: str
+    at: str
+    attempt: int
+    n_demos: int
+    detail: str = ""
+
+    def to_dict(self) -> dict:
+        return {
+            "kind": self.kind,
+            "at": self.at,
+            "attempt": self.attempt,
+            "n_demos": self.n_demos,
+            "detail": self.detail,
+        }
+
+    @classmethod
+    def from_dict(cls, data, path: str) -> Event:
+        d = _obj(data, path, ("kind", "at", "attempt", "n_demos"), ("detail",))
+        return cls(
+            _str(d["kind"], f"{path}.kind", EVENT_KINDS),
+            _stamp(d["at"], f"{path}.at"),
+            _int(d["attempt"], f"{path}.attempt"),
+            _int(d["n_demos"], f"{path}.n_demos"),
+            _str(d.get("detail", ""), f"{path}.detail"),
+        )
+
+
+@dataclass(frozen=True)
+class Attempt:
+    """One go at the run: its demos, robot tests, clock time and whether it was finished.
+
+    ``demos`` is the demonstration set b as it stands; ``undone`` the demos taken back
+    with Undo, oldest first (kept, never deleted). ``other_seconds`` is Experiment 2 clock
+    time besides the demos and the robot's attempts (setting up, and the time of demos
+    taken back). ``stopped`` says why teaching stopped ("finish": the trainee pressed
+    Finish; "time": the clock ran out; a simulated teacher's "satisfied" or "patience").
+    ``ended`` says why a later attempt replaced this one ("" for the current attempt, or
+    "reset", "load", "restore").
+    """
+
+    started: str
+    demos: tuple[Demo, ...] = ()
+    undone: tuple[Demo, ...] = ()
+    tests: tuple[Test, ...] = ()
+    other_seconds: float = 0.0
+    finished: bool = False
+    stopped: str = ""
+    ended: str = ""
+
+    @property
+    def n_demos(self) -> int:
+        return len(self.demos)
+
+    def to_dict(self) -> dict:
+        return {
+            "started": self.started,
+            "demos": [d.to_dict() for d in self.demos],
+            "undone": [d.to_dict() for d in self.undone],
+            "tests": [t.to_dict() for t in self.tests],
+            "other_seconds": self.other_seconds,
+            "finished": self.finished,
+            "stopped": self.stopped,
+            "ended": self.ended,
+        }
+
+    @classmethod
+    def from_dict(cls, data, path: str) -> Attempt:
+        d = _obj(
+            data,
+            path,
+            ("started", "demos"),
+            ("undone", "tests", "other_seconds", "finished", "stopped", "ended"),
+        )
+        demos = _list(d["demos"], f"{path}.demos")
+        undone = _list(d.get("undone", []), f"{path}.undone")
+        tests = _list(d.get("tests", []), f"{path}.tests")
+        attempt = cls(
+            started=_stamp(d["started"], f"{path}.started"),
+            demos=tuple(Demo.from_dict(x, f"{path}.demos[{i}]") for i, x in enumerate(demos)),
+            undone=tuple(
+                Demo.from_dict(x, f"{path}.undone[{i}]") for i, x in enumerate(undone)
+            ),
+            tests=tuple(Test.from_dict(x, f"{path}.tests[{i}]") for i, x in enumerate(tests)),
+            other_seconds=_num(d.get("other_seconds", 0.0), f"{path}.other_seconds", 0.0),
+            finished=_bool(d.get("finished", False), f"{path}.finished"),
+            stopped=_str(d.get("stopped", ""), f"{path}.stopped"),
+            ended=_str(d.get("ended", ""), f"{path}.ended", END_REASONS),
+        )
+        for i, t in enumerate(attempt.tests):
+            if t.after_demo > attempt.n_demos:
+                _fail(f"{path}.tests[{i}]", f"is after demo {t.after_demo} of {attempt.n_demos}")
+        return attempt
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    """One trainee's run in one condition: every attempt and every event (see the module).
+
+    Examples
+    --------
+    >>> rec = RunRecord.new(1, "maze", "VF", Trainee("Zoë", "zoe-3f1c2a9b0d"))
+    >>> rec.current.n_demos, rec.finished
+    (0, False)
+    >>> RunRecord.from_dict(rec.to_dict()) == rec
+    True
+    """
+
+    experiment: int
+    task: str
+    condition: str
+    trainee: Trainee
+    attempts: tuple[Attempt, ...]
+    events: tuple[Event, ...] = ()
+    run: int = 1
+    practice: bool = False
+    tool_version: str = field(default_factory=tool_version)
+    created: str = field(default_factory=utc_now)
+
+    @classmethod
+    def new(
+        cls,
+        experiment: int,
+        task: str,
+        condition: str,
+        trainee: Trainee,
+        run: int = 1,
+        practice: bool = False,
+        at: str | None = None,
+    ) -> RunRecord:
+        """A run with one empty attempt and its start event."""
+        at = utc_now() if at is None else at
+        return cls(
+            experiment=experiment,
+            task=task,
+            condition=condition,
+            trainee=trainee,
+            attempts=(Attempt(started=at),),
+            events=(Event("start", at, 0, 0),),
+            run=run,
+            practice=practice,
+            created=at,
+        )
+
+    # ------------------------------------------------------------ reading
+
+    @property
+    def current(self) -> Attempt:
+        """The attempt in progress (the last one)."""
+        return self.attempts[-1]
+
+    @property
+    def finished(self) -> bool:
+        return self.current.finished
+
+    @property
+    def label(self) -> str:
+        """E.g. "experiment 1, VF run" or "experiment 2, BF run 2", for messages."""
+        number = f" {self.run}" if self.experiment == 2 else ""
+        practice = " (practice)" if self.practice else ""
+        return f"experiment {self.experiment}, {self.condition} run{number}{practice}"
+
+    def same_run(self, other: RunRecord) -> bool:
+        """True when ``other`` is a record of the same experiment, condition and run number."""
+        return (self.experiment, self.task, self.condition, self.run, self.practice) == (
+            other.experiment,
+            other.task,
+            other.condition,
+            other.run,
+            other.practice,
+        )
+
+    # ------------------------------------------------------------ changing (new records)
+
+    def with_current(self, attempt: Attempt, event: Event | None = None) -> RunRecord:
+        """This record with the current attempt replaced (and ``event`` appended)."""
+        events = self.events if event is None else (*self.events, event)
+        return replace(self, attempts=(*self.attempts[:-1], attempt), events=events)
+
+    def with_new_attempt(self, attempt: Attempt, reason: str, event: Event) -> RunRecord:
+        """This record with the current attempt closed (``reason``) and ``attempt`` begun."""
+        closed = replace(self.current, ended=reason)
+        return replace(
+            self,
+            attempts=(*self.attempts[:-1], closed, attempt),
+            events=(*self.events, event),
+        )
+
+    # ------------------------------------------------------------ files
+
+    def to_dict(self) -> dict:
+        """JSON-ready form; :meth:`from_dict` gives an equal record back."""
+        return {
+            "format": RECORD_FORMAT,
+            "version": RECORD_VERSION,
+            "experiment": self.experiment,
+            "task": self.task,
+            "condition": self.condition,
+            "run": self.run,
+            "practice": self.practice,
+            "trainee": self.trainee.to_dict(),
+            "tool_version": self.tool_version,
+            "created": self.created,
+            "attempts": [a.to_dict() for a in self.attempts],
+            "events": [e.to_dict() for e in self.events],
+        }
+
+    @classmethod
+    def from_dict(cls, data) -> RunRecord:
+        """Check and read a record (raises InvalidFileError saying what is wrong)."""
+        if not isinstance(data, dict) or data.get("format") != RECORD_FORMAT:
+            found = data.get("format") if isinstance(data, dict) else None
+            hint = (
+                " It is a file of an older lfd-tutor (format 'lfd-tutor-session'): open it "
+                "with that version, or start a new run."
+                if found == "lfd-tutor-session"
+                else ""
+            )
+            raise InvalidFileError(
+                f"this is not an lfd-tutor run record (it needs \"format\": "
+                f"\"{RECORD_FORMAT}\", found {found!r}).{hint}"
+            )
+        version = data.get("version")
+        if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
+            raise InvalidFileError(
+                f"run record version {version!r} is not supported; this lfd-tutor reads "
+                f"version {', '.join(map(str, SUPPORTED_VERSIONS))}. Update lfd-tutor "
+                "(pip install -U lfd-tutor) to open newer files."
+            )
+        d = _obj(
+            data,
+            "",
+            (
+                "format",
+                "version",
+                "experiment",
+                "task",
+                "condition",
+                "trainee",
+                "attempts",
+                "events",
+            ),
+            ("run", "practice", "tool_version", "created"),
+        )
+        attempts = _list(d["attempts"], "attempts")
+        if not attempts:
+            _fail("attempts", "must hold at least one attempt")
+        events = _list(d["events"], "events")
+        record = cls(
+            experiment=_int(d["experiment"], "experiment", 1),
+            task=_str(d["task"], "task"),
+            condition=_str(d["condition"], "condition"),
+            trainee=Trainee.from_dict(d["trainee"]),
+            attempts=tuple(
+                Attempt.from_dict(a, f"attempts[{i}]") for i, a in enumerate(attempts)
+            ),
+            events=tuple(Event.from_dict(e, f"events[{i}]") for i, e in enumerate(events)),
+            run=_int(d.get("run", 1), "run", 1),
+            practice=_bool(d.get("practice", False), "practice"),
+            tool_version=_str(d.get("tool_version", ""), "tool_version"),
+            created=_stamp(d.get("created", record_start(attempts)), "created"),
+        )
+        for i, e in enumerate(record.events):
+            if e.attempt >= len(record.attempts):
+                _fail(f"events[{i}]", f"names attempt {e.attempt + 1} of {len(record.attempts)}")
+        return record

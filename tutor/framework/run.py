@@ -1,0 +1,381 @@
+r"""A teaching run: the typed run record kept in step with the session that judges it.
+
+:class:`TeachingRun` is what a tutor, a simulated teacher and the class analysis
+drive. Every change goes through it, in this order: the learner and the feedback are
+computed first (:class:`~tutor.framework.session.TeachingSession`), then a new
+:class:`~tutor.framework.record.RunRecord` replaces the old one with the demo and an
+event stamped by the wall clock. A change that fails leaves both as they were.
+
+History is append-only: Undo keeps the demo it takes back (``Attempt.undone``); Reset,
+and a Load that replaces the run, close the current attempt and start a new one, and
+:meth:`TeachingRun.restore` brings an earlier attempt back as a new one. Nothing a
+trainee did is deleted.
+
+A task's protocol subclasses :class:`TeachingRun` and names its conditions (the paper's
+NF/VF/VR for the maze, NF/RF/BF/SF for pick-and-place) with the feedback mode of each
+(what the set :math:`r` of shown realisations is; see :mod:`tutor.framework.session`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import InvalidFileError, InvalidParameterError, TutorError, WrongRunError
+from ..fileio import read_json, write_json
+from .record import Attempt, Demo, Event, RunRecord, Test, Trainee, utc_now
+from .session import FeedbackRecord, TeachingSession
+from .task import Task
+
+__all__ = ["TeachingRun", "RunOverError"]
+
+
+class RunOverError(TutorError, RuntimeError):
+    """The run is finished (or its time is used up), so it cannot change any more."""
+
+
+def _floats(a) -> tuple[float, ...]:
+    return tuple(float(v) for v in np.asarray(a, dtype=float).ravel())
+
+
+class TeachingRun:
+    """One trainee's run in one condition (see the module docstring).
+
+    Parameters
+    ----------
+    task : Task
+    record : RunRecord
+        The run to continue; its current attempt's demos are replayed into the learner.
+    clock : callable, optional
+        Gives the wall-clock stamp of each event (default :func:`utc_now`).
+
+    Raises
+    ------
+    InvalidFileError
+        The record is for another task or condition, or a demo in it cannot be replayed.
+    """
+
+    #: the experiment number in the paper
+    experiment: ClassVar[int] = 0
+    #: condition name -> feedback mode
+    conditions: ClassVar[dict[str, str]] = {}
+
+    def __init__(self, task: Task, record: RunRecord, clock=utc_now):
+        self.task = task
+        self.clock = clock
+        self._check_record(record)
+        self._record = record
+        self.session = self._replay(record.current.demos)
+
+    @classmethod
+    def fresh_record(
+        cls,
+        condition: str,
+        task: Task,
+        trainee: Trainee | None = None,
+        run: int = 1,
+        practice: bool = False,
+        clock=utc_now,
+    ) -> RunRecord:
+        """The record of a new run: one empty attempt."""
+        cls.check_condition(condition)
+        trainee = Trainee.from_name() if trainee is None else trainee
+        if not isinstance(trainee, Trainee):
+            raise InvalidParameterError(f"trainee must be a Trainee, got {trainee!r}")
+        if isinstance(run, bool) or not isinstance(run, int) or run < 1:
+            raise InvalidParameterError(f"run must be a whole number >= 1, got {run!r}")
+        return RunRecord.new(
+            cls.experiment,
+            task.name,
+            condition,
+            trainee,
+            run=run,
+            practice=bool(practice),
+            at=clock(),
+        )
+
+    @classmethod
+    def new(cls, condition: str, task: Task, clock=utc_now, **options):
+        """A fresh run (``options``: trainee, run, practice; see :meth:`fresh_record`)."""
+        record = cls.fresh_record(condition, task, clock=clock, **options)
+        return cls.from_record(task, record, clock)
+
+    @classmethod
+    def from_record(cls, task: Task, record: RunRecord, clock=utc_now):
+        """Continue the run ``record`` (its current attempt's demos are replayed)."""
+        return cls(task, record, clock)
+
+    @classmethod
+    def check_condition(cls, condition) -> str:
+        if condition not in cls.conditions:
+            raise InvalidParameterError(
+                f"condition must be one of {', '.join(cls.conditions)}, got {condition!r}"
+            )
+        return condition
+
+    def _check_record(self, record: RunRecord) -> None:
+        if record.task != self.task.name or record.experiment != self.experiment:
+            raise WrongRunError(
+                f"this file holds a {record.task!r} run of experiment {record.experiment}, "
+                f"not a {self.task.name!r} run of experiment {self.experiment}"
+            )
+        if record.condition not in self.conditions:
+            raise InvalidFileError(
+                f"the run's condition {record.condition!r} is not one of "
+                f"{', '.join(self.conditions)}"
+            )
+
+    # ------------------------------------------------------------ what the run is
+
+    @property
+    def record(self) -> RunRecord:
+        """The run record as it stands (immutable; replaced by every change)."""
+        return self._record
+
+    @property
+    def condition(self) -> str:
+        return self._record.condition
+
+    @property
+    def feedback(self) -> str:
+        return self.conditions[self.condition]
+
+    @property
+    def attempt(self) -> Attempt:
+        """The current attempt."""
+        return self._record.current
+
+    @property
+    def n_demos(self) -> int:
+        return self.session.n_demos
+
+    @property
+    def finished(self) -> bool:
+        return self._record.finished
+
+    def batch(self) -> np.ndarray | None:
+        """The conditions shown in ``"batch"`` feedback (override where a task has them)."""
+        return None
+
+    def new_session(self) -> TeachingSession:
+        """An empty session for this run's feedback mode."""
+        batch = self.batch() if self.feedback == "batch" else None
+        return TeachingSession(self.task, feedback=self.feedback, batch=batch)
+
+    def _replay(self, demos) -> TeachingSession:
+        session = self.new_session()
+        for i, demo in enumerate(demos, start=1):
+            try:
+                session.add_demo(
+                    np.asarray(demo.samples, dtype=float),
+                    shown=demo.shown if self.feedback == "selected" else None,
+                    condition=None if demo.condition is None else np.asarray(demo.condition),
+                )
+            except TutorError as exc:
+                raise InvalidFileError(f"demo {i} of the run cannot be replayed: {exc}") from exc
+        return session
+
+    def _event(self, kind: str, n_demos: int | None = None, detail: str = "") -> Event:
+        n = self.attempt.n_demos if n_demos is None else n_demos
+        return Event(kind, self.clock(), len(self._record.attempts) - 1, n, detail)
+
+    def _check_open(self) -> None:
+        if self.finished:
+            raise RunOverError(
+                "this run is finished, so it cannot change any more: start the next run, or "
+                "press Reset to begin a new attempt (this one is kept)"
+            )
+
+    # ------------------------------------------------------------ teaching
+
+    def add_demo(
+        self,
+        raw,
+        *,
+        condition=None,
+        shown=None,
+        seconds: float | None = None,
+        followed_rule: bool | None = None,
+        chosen_by: str = "",
+        mistake: str = "",
+    ) -> FeedbackRecord:
+        """Add one demonstration; returns the feedback after it.
+
+        ``condition`` is the test condition it was meant for (read off the demo when
+        None); ``shown`` the conditions asked to see (SF); ``seconds`` its cost on the
+        clock; ``followed_rule`` VR's compliance; ``chosen_by`` and ``mistake`` notes on
+        why it was given and what went wrong on purpose (simulated teachers, the hand).
+
+        Raises
+        ------
+        RunOverError
+            The run is finished.
+        InvalidDemoError, InvalidParameterError
+            The demo cannot be used; nothing changed.
+        """
+        self._check_open()
+        record = self.session.add_demo(raw, shown=shown, condition=condition)
+        demo = Demo(
+            samples=tuple(_floats(row) for row in self.session._demos[-1]),
+            condition=None if condition is None else _floats(self.session._conditions[-1]),
+            shown=None if shown is None else tuple(int(i) for i in np.ravel(shown)),
+            seconds=None if seconds is None else float(seconds),
+            followed_rule=None if followed_rule is None else bool(followed_rule),
+            chosen_by=str(chosen_by),
+            mistake=str(mistake or ""),
+        )
+        attempt = replace(self.attempt, demos=(*self.attempt.demos, demo))
+        self._record = self._record.with_current(attempt, self._event("add", attempt.n_demos))
+        return record
+
+    def add_demos(self, items, detail: str = "") -> int:
+        """Add several demos all or nothing (a Load); returns how many were added.
+
+        ``items`` are ``(raw, options)`` pairs, ``options`` a dict of :meth:`add_demo`'s
+        keyword arguments. If one is refused, the run is left exactly as it was and the
+        error names the demo.
+        """
+        self._check_open()
+        items = list(items)
+        before_record, before_session = self._record, self.session
+        trial = self._replay(self.attempt.demos)
+        self.session = trial
+        try:
+            for i, (raw, options) in enumerate(items, start=1):
+                try:
+                    self.add_demo(raw, **options)
+                except TutorError as exc:
+                    raise type(exc)(f"demo {i}: {exc}") from exc
+        except BaseException:
+            self._record, self.session = before_record, before_session
+            raise
+        self._record = self._record.with_current(self.attempt, self._event("load", detail=detail))
+        return len(items)
+
+    def undo(self, spent_seconds: float = 0.0) -> FeedbackRecord | None:
+        """Take back the latest demo (kept in ``Attempt.undone``); returns the new latest.
+
+        ``spent_seconds`` is clock time the demo used that stays spent (Experiment 2).
+        """
+        self._check_open()
+        if not self.attempt.demos:
+            raise InvalidParameterError("there is no demonstration to undo")
+        latest = self.session.undo()
+        a = self.attempt
+        taken = a.demos[-1]
+        tests = tuple(t for t in a.tests if t.after_demo < a.n_demos or t.after_run)
+        attempt = replace(
+            a,
+            demos=a.demos[:-1],
+            undone=(*a.undone, taken),
+            tests=tests,
+            other_seconds=a.other_seconds + float(spent_seconds),
+        )
+        self._record = self._record.with_current(attempt, self._event("undo", attempt.n_demos))
+        return latest
+
+    def test(self, plants, after_run: bool = False) -> np.ndarray:
+        """Record that the robot tried ``plants`` (indices into B^); returns pass/fail."""
+        rec = self.session.latest
+        if rec is None:
+            raise InvalidParameterError("give a demonstration before testing the robot")
+        n = len(self.task.conditions)
+        idx = tuple(int(p) for p in plants)
+        if not idx or any(not 0 <= p < n for p in idx):
+            raise InvalidParameterError(f"test conditions are numbers from 0 to {n - 1}")
+        a = self.attempt
+        attempt = replace(a, tests=(*a.tests, Test(a.n_demos, idx, bool(after_run))))
+        detail = " ".join(map(str, idx))
+        self._record = self._record.with_current(attempt, self._event("test", detail=detail))
+        return rec.passed[list(idx)]
+
+    def spend(self, seconds: float) -> None:
+        """Count clock time besides demos and robot attempts (e.g. setting up a plant)."""
+        if isinstance(seconds, bool) or not (float(seconds) >= 0 and np.isfinite(seconds)):
+            raise InvalidParameterError(f"seconds must be a finite number >= 0, got {seconds!r}")
+        a = self.attempt
+        attempt = replace(a, other_seconds=a.other_seconds + float(seconds))
+        self._record = self._record.with_current(
+            attempt, self._event("spend", detail=f"{float(seconds):g}")
+        )
+
+    def finish(self, stopped: str = "finish") -> None:
+        """End the run; ``stopped`` says why ("finish", "time", or a simulated reason)."""
+        if self.attempt.finished:
+            return
+        attempt = replace(self.attempt, finished=True, stopped=str(stopped))
+        self._record = self._record.with_current(attempt, self._event("finish", detail=stopped))
+
+    # ------------------------------------------------------------ attempts
+
+    def reset(self) -> None:
+        """Start a new, empty attempt; the current one is kept in the record."""
+        self._record = self._record.with_new_attempt(
+            Attempt(started=self.clock()), "reset", self._event("reset", 0)
+        )
+        self.session = self.new_session()
+
+    def replace_with(self, other: RunRecord, detail: str = "") -> None:
+        """A Load of a run file: its current attempt becomes this run's new attempt.
+
+        Refused (nothing changes) when ``other`` is another experiment, condition or
+        run, or when this run is finished; the message names both runs.
+        """
+        mine = self._record
+        if not mine.same_run(other):
+            raise WrongRunError(
+                f"that file holds {other.trainee.name}'s {other.label}, but this tutor is "
+                f"{mine.label}: open it in the matching tutor. Nothing was loaded and this "
+                "run's file is untouched."
+            )
+        if self.finished:
+            raise WrongRunError(
+                f"this {mine.label} is finished, so nothing can be loaded into it. Nothing "
+                "was loaded and its file is untouched; press Reset first to start a new "
+                "attempt (this one is kept)."
+            )
+        session = self._replay(other.current.demos)
+        attempt = replace(other.current, started=self.clock(), ended="", finished=False)
+        attempt = replace(attempt, stopped="")
+        self._record = mine.with_new_attempt(
+            attempt, "load", self._event("load", attempt.n_demos, detail)
+        )
+        self.session = session
+
+    def restore(self, index: int) -> None:
+        """Bring attempt ``index`` (0-based) back as a new attempt; the current one is kept."""
+        attempts = self._record.attempts
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+            raise InvalidParameterError(f"an attempt is a number, got {index!r}")
+        if not 0 <= index < len(attempts) - 1:
+            raise InvalidParameterError(
+                f"there is no earlier attempt {index + 1}; this run has attempts 1 to "
+                f"{len(attempts) - 1} before the current one"
+            )
+        old = attempts[index]
+        session = self._replay(old.demos)
+        attempt = replace(old, started=self.clock(), ended="")
+        self._record = self._record.with_new_attempt(
+            attempt, "restore", self._event("restore", attempt.n_demos, str(index + 1))
+        )
+        self.session = session
+
+    # ------------------------------------------------------------ files
+
+    def to_dict(self) -> dict:
+        return self._record.to_dict()
+
+    @classmethod
+    def from_dict(cls, data, task: Task, clock=utc_now):
+        """Rebuild a run from :meth:`to_dict`'s output (raises InvalidFileError)."""
+        return cls.from_record(task, RunRecord.from_dict(data), clock)
+
+    def save(self, path):
+        """Write the record atomically (raises SaveError when it cannot be written)."""
+        return write_json(path, self.to_dict())
+
+    @classmethod
+    def load(cls, path, task: Task, clock=utc_now):
+        return cls.from_dict(read_json(path, "run file"), task, clock)

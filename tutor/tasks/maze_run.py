@@ -1,0 +1,45 @@
+"""One run of Experiment 1 (Sena & Howard, "Experiment 1"): the maze under NF, VF or VR.
+
+NF  no feedback: r is empty while teaching; the picture is revealed after Finish.
+VF  visual feedback: r = R^ (every test start point's realisation) after every demo.
+VR  visual feedback and the paper's three rules (:mod:`tutor.tasks.maze_rules`); each
+    demo's compliance with the rule in force is kept in the run record.
+
+Trainees do the three conditions in the paper's order, NF, VF, VR.
+"""
+
+from __future__ import annotations
+
+from ..framework import TeachingRun
+from ..framework.session import FeedbackRecord
+from .maze_rules import RuleAdvice, advise, followed
+
+__all__ = ["MazeRun", "CONDITIONS", "PHASE_ORDER"]
+
+CONDITIONS = {"NF": "none", "VF": "all", "VR": "all"}
+#: the paper's order of the three phases
+PHASE_ORDER = ("NF", "VF", "VR")
+
+
+class MazeRun(TeachingRun):
+    """A maze run (see the module docstring); ``MazeRun.new("VF", MazeTask())``."""
+
+    experiment = 1
+    conditions = CONDITIONS
+
+    def advice(self) -> RuleAdvice:
+        """VR: the rule that applies to the next demo."""
+        return advise(self.task, self.session)
+
+    def add_demo(self, raw, **options) -> FeedbackRecord:
+        """Add a demo; in VR its compliance with the rule in force is recorded."""
+        if self.condition == "VR" and options.get("followed_rule") is None:
+            rule = self.advice()
+            start = self.task.condition_of(self.task.preprocess(raw))
+            options["followed_rule"] = followed(rule, start)
+        return super().add_demo(raw, **options)
+
+    @property
+    def compliance(self) -> list[bool]:
+        """VR: whether each demo of the current attempt followed its rule."""
+        return [bool(d.followed_rule) for d in self.attempt.demos if d.followed_rule is not None]
