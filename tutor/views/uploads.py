@@ -17,7 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import SaveError, TutorError
-from ..fileio import MAX_FILE_BYTES, MAX_NAME_BYTES, save_error
+from ..fileio import MAX_FILE_BYTES, MAX_NAME_BYTES, megabytes, save_error
 
 __all__ = ["on_upload", "safe_upload_name", "shown_upload_name"]
 
@@ -123,8 +123,8 @@ def on_upload(
             return
         if len(content) > MAX_FILE_BYTES:
             show(
-                f"Nothing was loaded: {shown} is {len(content) / 1e6:.0f} MB, larger than the "
-                f"{MAX_FILE_BYTES / 1e6:.0f} MB a tutor file can be; is it the right file?"
+                f"Nothing was loaded: {shown} is {megabytes(len(content))}, larger than the "
+                f"{megabytes(MAX_FILE_BYTES)} a tutor file can be; is it the right file?"
             )
             return
         name = safe_upload_name(raw_name)
