@@ -277,7 +277,7 @@ def _load_json(path: Path, expected) -> DemoSet:
             f'(it needs "format": "{DEMOS_FORMAT}")'
         )
     version = data.get("version", 1)
-    if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
+    if type(version) is not int or version not in SUPPORTED_VERSIONS:
         raise InvalidFileError(
             f"{path.name} has version {version!r}, which this tutor cannot read; it reads "
             f"version {', '.join(map(str, SUPPORTED_VERSIONS))} (a whole number). Save the "
@@ -382,7 +382,7 @@ def _load_csv(path: Path, expected) -> DemoSet:
         header = next(reader, None)
     except csv.Error as exc:
         raise InvalidFileError(f"{where}, line 1: {exc}") from exc
-    if not header or len(header) < 3:
+    if not header or len(header) < 2:
         raise InvalidFileError(
             f"{where}: the first line must be a header naming the columns, like "
             "'demo,t,x,y' (separated by commas, ';' or tabs)"

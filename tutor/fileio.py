@@ -36,6 +36,7 @@ __all__ = [
     "check_file_name",
     "save_error",
     "finite_number",
+    "megabytes",
     "MAX_FILE_BYTES",
     "MAX_NAME_BYTES",
     "STALE_TEMP_SECONDS",
@@ -127,10 +128,15 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
+def megabytes(n_bytes: int) -> str:
+    """``n_bytes`` in words, e.g. ``"50 MB"`` (1 MB = 1024 * 1024 bytes)."""
+    return f"{n_bytes / 2**20:.0f} MB" if n_bytes >= 2**20 else f"{n_bytes} bytes"
+
+
 def _too_large(path, what: str, size: int) -> InvalidFileError:
     return InvalidFileError(
-        f"{what} {_shown(path)} is {size / 1e6:.0f} MB or more, larger than the "
-        f"{MAX_FILE_BYTES / 1e6:.0f} MB a tutor file can be; is it the right file?"
+        f"{what} {_shown(path)} is {megabytes(size)} or more, larger than the "
+        f"{megabytes(MAX_FILE_BYTES)} a tutor file can be; is it the right file?"
     )
 
 

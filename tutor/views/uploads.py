@@ -17,7 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import SaveError, TutorError
-from ..fileio import MAX_FILE_BYTES, MAX_NAME_BYTES, save_error
+from ..fileio import MAX_FILE_BYTES, MAX_NAME_BYTES, megabytes, save_error
 
 __all__ = ["on_upload", "safe_upload_name", "shown_upload_name"]
 
@@ -83,6 +83,15 @@ def _message_line(load: Callable) -> Callable[[str], None]:
     return _log.warning
 
 
+def _retitle(load: Callable, stored: str, shown: str) -> None:
+    """Put the trainee's file name back into the tutor's message where it names the stored one."""
+    owner = getattr(load, "__self__", None)
+    message = getattr(owner, "message", None)
+    if stored != shown and isinstance(message, str) and stored in message:
+        owner.message = message.replace(stored, shown)
+        owner.refresh()
+
+
 def on_upload(
     load: Callable[[Path], None], report: Callable[[str], None] | None = None
 ) -> Callable[[dict], None]:
@@ -91,8 +100,9 @@ def on_upload(
     Parameters
     ----------
     load : callable
-        Takes the path of the stored upload. Its messages name the file by its
-        stored name, which is the trainee's name unless that name was unsafe.
+        Takes the path of the stored upload, whose name is the trainee's unless
+        that was unsafe. Where the tutor's message names the stored file, the
+        trainee's own name is put back.
     report : callable, optional
         Shows a message to the trainee; by default the tutor's message line (the
         ``message`` attribute and ``refresh()`` of the object ``load`` is bound to).
@@ -117,16 +127,20 @@ def on_upload(
             item, raw_name = None, None
         shown = shown_upload_name(raw_name)
         try:
-            content = bytes(item["content"])
-        except (KeyError, TypeError, ValueError):
+            raw = item["content"]
+        except (KeyError, TypeError):
+            raw = None
+        if not isinstance(raw, (bytes, bytearray, memoryview)):
             show(f"Nothing was loaded: {shown} arrived without its content; upload it again.")
             return
-        if len(content) > MAX_FILE_BYTES:
+        size = memoryview(raw).nbytes
+        if size > MAX_FILE_BYTES:
             show(
-                f"Nothing was loaded: {shown} is {len(content) / 1e6:.0f} MB, larger than the "
-                f"{MAX_FILE_BYTES / 1e6:.0f} MB a tutor file can be; is it the right file?"
+                f"Nothing was loaded: {shown} is {megabytes(size)}, larger than the "
+                f"{megabytes(MAX_FILE_BYTES)} a tutor file can be; is it the right file?"
             )
             return
+        content = bytes(raw)
         name = safe_upload_name(raw_name)
         try:
             with tempfile.TemporaryDirectory(
@@ -138,6 +152,7 @@ def on_upload(
                 except OSError as exc:
                     raise save_error(name, exc) from exc
                 load(path)
+            _retitle(load, name, shown)
         except SaveError as exc:  # the upload, or the tutor's autosave, could not be written
             show(str(exc).replace(name, shown))
         except TutorError as exc:
