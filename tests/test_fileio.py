@@ -219,6 +219,13 @@ def test_data_json_cannot_hold_is_a_save_error_and_writes_nothing(tmp_path):
     assert os.listdir(tmp_path) == []
 
 
+def _cannot(reason: str):
+    """Skip on a developer's machine that cannot mount; in CI (root, Linux) it must work."""
+    if os.environ.get("CI"):
+        pytest.fail(f"CI must run the real-disk tests: {reason}")
+    pytest.skip(reason)
+
+
 @pytest.fixture
 def tmpfs(tmp_path):
     """Make small real tmpfs mounts (root on Linux only); unmounted afterwards."""
@@ -226,7 +233,7 @@ def tmpfs(tmp_path):
 
     def make(size="64k"):
         if not LINUX_ROOT:
-            pytest.skip("mounting a tmpfs needs root on Linux")
+            _cannot("mounting a tmpfs needs root on Linux")
         folder = tmp_path / f"mnt{len(mounted)}"
         folder.mkdir()
         done = subprocess.run(
@@ -235,7 +242,7 @@ def tmpfs(tmp_path):
             text=True,
         )
         if done.returncode:
-            pytest.skip(f"mounting a tmpfs is not permitted here: {done.stderr.strip()}")
+            _cannot(f"mounting a tmpfs is not permitted here: {done.stderr.strip()}")
         mounted.append(folder)
         return folder
 
@@ -264,7 +271,7 @@ def test_a_read_only_disk_is_a_save_error_and_the_file_stays(tmpfs):
     write_json(path, {"a": 1})
     done = subprocess.run(["mount", "-o", "remount,ro", str(disk)], capture_output=True)
     if done.returncode:
-        pytest.skip("remounting read-only is not permitted here")
+        _cannot("remounting read-only is not permitted here")
     for target in (path, disk / "new" / "s.json"):
         with pytest.raises(SaveError, match="on a read-only disk: save somewhere else") as info:
             write_json(target, {"a": 2})
