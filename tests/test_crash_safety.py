@@ -25,8 +25,8 @@ from pathlib import Path
 import pytest
 
 from tests.helpers import IN_CI, REPO
-from tutor.framework import TeachingSession
 from tutor.tasks.maze import MazeTask
+from tutor.tasks.maze_run import MazeRun
 
 CHILD = Path(__file__).with_name("crash_child.py")
 #: random kills on one session file before the next file (keeps files, and loads, small)
@@ -50,8 +50,8 @@ def _kill_count() -> int:
 
 
 def _saved_demos(path: Path, task: MazeTask) -> int:
-    """How many demonstrations the session file at ``path`` holds (it must load)."""
-    return TeachingSession.load(path, task).n_demos
+    """How many demonstrations the run file at ``path`` holds (it must load and replay)."""
+    return MazeRun.load(path, task).n_demos
 
 
 def _child_env() -> dict[str, str]:

@@ -159,6 +159,7 @@ def test_save_export_and_compare(tmp_path, good):
     assert "NF: eta" in text and "7.6%" in text and "13.4%" in text and "14.0%" in text
     assert "one person" in text
     exported = json.loads((tmp_path / "VF.json").read_text())
-    assert exported["meta"]["condition"] == "VF" and exported["meta"]["finished"]
-    assert len(exported["records"]) == len(good)
+    assert exported["format"] == "lfd-tutor-run" and exported["condition"] == "VF"
+    assert exported["attempts"][-1]["finished"]
+    assert len(exported["attempts"][-1]["demos"]) == len(good)
     assert os.path.getsize(tmp_path / "VF.json") > 0

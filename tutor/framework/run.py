@@ -247,7 +247,8 @@ class TeachingRun:
                 try:
                     self.add_demo(raw, **options)
                 except TutorError as exc:
-                    raise type(exc)(f"demo {i}: {exc}") from exc
+                    where = f"demo {i} of {detail}" if detail else f"demo {i}"
+                    raise type(exc)(f"{where}: {exc}") from exc
         except BaseException:
             self._record, self.session = before_record, before_session
             raise

@@ -56,8 +56,9 @@ def guarded(method):
 
     @functools.wraps(method)
     def wrapper(self, *args, **kwargs):
+        result = None
         try:
-            return method(self, *args, **kwargs)
+            result = method(self, *args, **kwargs)
         except TutorError as exc:
             self.message = str(exc)
         except Exception as exc:  # a bug must not cost the trainee their run
@@ -66,8 +67,11 @@ def guarded(method):
                 f"Something went wrong inside the tutor ({type(exc).__name__}: {exc}). "
                 "Your demonstrations are kept; please tell your educator."
             )
-        self.refresh()
-        return None
+        try:
+            self.refresh()
+        except Exception:  # drawing must not lose the step either
+            log.exception("refreshing the tutor failed")
+        return result
 
     return wrapper
 
@@ -184,10 +188,11 @@ class TutorApp:
             try:
                 record = RunRecord.from_dict(read_json(path, "run file"))
             except InvalidFileError as exc:
-                return None, f"{path.name} cannot be read ({exc}); it is kept untouched."
+                return None, f"Could not resume from {path.name}: {exc}. It is kept untouched."
             if not self._matches(record):
                 return None, (
-                    f"{path.name} holds {record.trainee.name}'s {record.label}, not "
+                    f"Could not resume from {path.name}: it holds "
+                    f"{record.trainee.name}'s {record.label}, not "
                     f"{self.trainee.name}'s {self._fresh_record_like().label}; it is kept "
                     "untouched."
                 )
@@ -200,7 +205,7 @@ class TutorApp:
             run = self.run_class.from_record(self.task, record)
         except InvalidFileError as exc:
             self._release_lock()
-            return None, f"{path.name} cannot be replayed ({exc}); it is kept untouched."
+            return None, f"Could not resume from {path.name}: {exc}. It is kept untouched."
         self.message = (
             f"Resumed {run.n_demos} demonstration(s) from {path.name}."
             + (" This run is finished." if run.finished else "")
@@ -374,6 +379,16 @@ class TutorApp:
         if self._refuse_if_read_only():
             return
         path = Path(path)
+        try:
+            self._load(path)
+        except TutorError as exc:
+            raise type(exc)(
+                f"Nothing was loaded from {path.name}: {exc} This run and its file are "
+                "unchanged."
+            ) from exc
+        self._autosave()
+
+    def _load(self, path: Path) -> None:
         suffix = path.suffix.lower()
         if suffix == ".csv":
             self._load_demo_file(path)
@@ -391,24 +406,17 @@ class TutorApp:
                 self._load_demo_file(path)
             else:
                 raise InvalidFileError(
-                    f"{path.name} is neither a demonstration file (\"format\": "
-                    f"\"{DEMOS_FORMAT}\") nor a run file (\"format\": \"{RECORD_FORMAT}\")"
-                    + (f"; it says \"format\": {kind!r}" if kind else "")
-                    + ". Nothing was loaded."
+                    f"it is neither a demonstration file (\"format\": \"{DEMOS_FORMAT}\") "
+                    f"nor a run file (\"format\": \"{RECORD_FORMAT}\")"
+                    + (f"; it says \"format\": {kind!r}." if kind else ".")
                 )
         else:
-            raise InvalidFileError(
-                f"{path.name}: load a .json or .csv file (demonstrations or a saved run)"
-            )
-        self._autosave()
+            raise InvalidFileError("load a .json or .csv file (demonstrations or a saved run).")
 
     def _load_demo_file(self, path: Path) -> None:
         demos = load_demos(path, columns=self.demo_columns)
         items = self._load_items(demos, path.name)
-        try:
-            n = self.run.add_demos(items, detail=path.name)
-        except TutorError as exc:
-            raise type(exc)(f"Nothing was loaded from {path.name}: {exc}") from exc
+        n = self.run.add_demos(items, detail=path.name)
         self.message = f"Added {n} demonstration(s) from {path.name}."
 
     #: the columns of a demonstration file, time first (subclasses set them)
