@@ -331,6 +331,64 @@ def test_tutor_updates_the_scene(task):
     assert "Animated" in nf.scene3d.widget.children[0].value
 
 
+def test_sf_scene_animates_the_plant_just_tested(task):
+    scene = Scene3D(task, mode="static", robot=False)
+    tutor = PickPlaceTutor("SF", task=task, scene3d=scene, seed=6)
+    tutor.demonstrate(12)
+    tutor.test([87])
+    assert "plant (9, 8)" in scene.animation.label  # the test, not the demonstration
+    tutor.demonstrate(40)  # a new demo: the old test no longer counts
+    assert "plant (9, 8)" not in scene.animation.label
+
+
+def test_recorder_keeps_the_tree_as_the_server_does():
+    import meshcat
+    import meshcat.animation as ma
+    import meshcat.geometry as mg
+
+    rec = SceneRecorder()
+    vis = meshcat.Visualizer(window=rec)
+    vis["a/b"].set_object(mg.Box([1, 1, 1]))
+    vis["a/b"].set_property("visible", False)
+    vis["a/b"].set_object(mg.Sphere(1.0))  # a new object drops the old one's properties
+    vis["a"].set_transform(np.eye(4))
+    vis["c"].set_object(mg.Box([1, 1, 1]))
+    anim = ma.Animation()
+    with anim.at_frame(vis, 0) as frame:
+        frame["c"].set_transform(np.eye(4))
+    vis.set_animation(anim)
+    kinds = [(k, p) for k, p, _ in rec.commands()]
+    assert kinds == [
+        ("set_transform", "/meshcat/a"),
+        ("set_object", "/meshcat/a/b"),
+        ("set_object", "/meshcat/c"),
+        ("set_animation", ""),  # animations last: they need the objects
+    ]
+    vis["a"].delete()
+    assert [p for _, p, _ in rec.commands()] == ["/meshcat/c", ""]
+    from tutor.views.meshcat_recorder import empty_animation
+
+    rec.send_packed("set_animation", "", empty_animation())
+    assert [p for _, p, _ in rec.commands()] == ["/meshcat/c"]
+
+
+def test_page_is_filled_from_the_static_files_in_one_pass():
+    from tutor.views.scene_page import page, static_text
+
+    for name in ("scene3d_page.html", "scene3d_page.js", "scene3d_view.js"):
+        assert static_text(name).strip(), name  # packaged beside sketchpad.js
+    template = static_text("scene3d_page.html")
+    assert {"{{title}}", "{{overlay}}", "{{data}}", "{{viewer}}", "{{script}}"} <= set(
+        re.findall(r"\{\{\w+\}\}", template)
+    )
+    text = page("a <b> & c", "<p>{{title}}</p>", "", "")
+    assert "<title>a &lt;b&gt; &amp; c</title>" in text
+    assert "<p>{{title}}</p>" in text  # the scene data is not searched for slots
+    assert "MeshCat.Viewer" in text and "window.lfdApply = lfdApply" in text
+    assert 'id="lfd-legend"' not in text  # no legend, no caption: no overlay
+    assert text.count("{{") == 1
+
+
 def _open_view(scene) -> list:
     """Pretend a browser opened the notebook viewer; returns the list of messages sent."""
     sent = []

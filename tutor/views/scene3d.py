@@ -36,13 +36,22 @@ Two ways to show it
 started), behind JupyterHub or Binder and in Voila opened from another machine; live
 otherwise.
 
-Every Meshcat command goes through a :class:`SceneRecorder`, which keeps the scene
-tree the way meshcat's server does (so the static page needs no server), forwards
-the commands to the live server when there is one and tells its listeners (the
-notebook viewer). Several :class:`Scene3D` in one kernel share that server: the live
-viewer shows the one updated last. Drawing methods change the scene at once; the
+Every Meshcat command goes through a :class:`SceneRecorder`
+(:mod:`tutor.views.meshcat_recorder`), which keeps the scene tree the way meshcat's
+server does (so the static page needs no server), forwards the commands to the live
+server when there is one and tells its listeners (the notebook viewer). Several
+:class:`Scene3D` in one kernel share that server: the live viewer shows the one
+updated last. Drawing methods change the scene at once; the
 notebook viewer receives the changes at :meth:`Scene3D.refresh` (which
 :meth:`Scene3D.update` calls).
+
+The modules
+-----------
+This one draws (:class:`Scene3D`: the plants' status colours, trails, the animation,
+the widget); :mod:`tutor.views.meshcat_recorder` records and replays the commands;
+:mod:`tutor.views.scene_meshes` holds the geometry (robot meshes, table, tray, bin,
+plants, hand); :mod:`tutor.views.scene_page` chooses live or static and builds the
+page and the notebook widget from the static files in ``tutor/views/static/``.
 
 Shapes
 ------
@@ -54,21 +63,25 @@ status : (100,) of str
 
 from __future__ import annotations
 
-import base64
-import gzip
 import html
-import os
-import struct
 import threading
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
-from urllib.parse import urlparse
 
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..runtime import headless
+from .meshcat_recorder import SceneRecorder, delete_command, empty_animation, frame_commands
+from .scene_meshes import (
+    HAND_CLOSED,
+    HAND_OPEN,
+    draw_fixtures,
+    draw_hand,
+    hex_colour,
+    plant_ball,
+    robot_meshes,
+)
+from .scene_page import choose_mode, page, scene_data, viewer_widget_class
 from .style import DEMO, FAIL, PASS
 
 __all__ = [
@@ -84,251 +97,12 @@ __all__ = [
 UNKNOWN = "#d0d0d0"  # as tutor.views.pickplace_app.UNKNOWN
 #: colour of a plant's ball by status (the tray map's colours)
 STATUS_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
-HAND_OPEN = "#e6ab02"  #: the hand marker while the hand is open (yellow)
-HAND_CLOSED = "#7b3294"  #: ... while it is closed, holding a plant (purple)
-TABLE = "#c8b08a"
-TRAY = "#5b5b5b"
-BIN = "#8c8c8c"
-STEM = "#5a7a3a"
 
 #: Where the camera sits (m) relative to the point it looks at, the middle of the scene
 #: (:meth:`Scene3D.scene_centre`). Meshcat's camera orbits the viewer's origin, so the
 #: whole scene is shifted to put its middle there.
 CAMERA_POSITION = (0.75, -0.7, 0.62)
-ROOT = "/meshcat"
 DYNAMIC = "/meshcat/lfd"  # everything one Scene3D draws itself (the robot is shared)
-
-
-def _hex(colour: str) -> int:
-    return int(colour.lstrip("#"), 16)
-
-
-def _split(path: str) -> list[str]:
-    return [p for p in path.split("/") if p]
-
-
-# --------------------------------------------------------------------------- recorder
-
-
-class _Node:
-    __slots__ = ("object", "transform", "properties", "animation", "children")
-
-    def __init__(self):
-        self.object = None  # (type, path, packed)
-        self.transform = None
-        self.properties: dict[str, tuple] = {}
-        self.animation = None
-        self.children: dict[str, _Node] = {}
-
-    def find(self, parts) -> _Node:
-        node = self
-        for p in parts:
-            node = node.children.setdefault(p, _Node())
-        return node
-
-    def walk(self):
-        yield self
-        for child in self.children.values():
-            yield from child.walk()
-
-
-class SceneRecorder:
-    """A Meshcat window that records the scene tree and forwards to a live viewer.
-
-    It stands in for ``meshcat.visualizer.ViewerWindow``: ``meshcat.Visualizer(window=
-    recorder)`` sends every command here. The tree is kept as meshcat's server keeps
-    it (an object, its properties, a transform and an animation per path), so
-    :meth:`commands` and :meth:`static_html` need no server.
-
-    Parameters
-    ----------
-    live : meshcat ViewerWindow, optional
-        Forward each command to it too (its zmq socket should have a receive timeout).
-    """
-
-    def __init__(self, live=None):
-        self.tree = _Node()
-        self.live = live
-        #: callables ``f(kind, path, packed)`` told of every command (the notebook viewer)
-        self.listeners: list = []
-        self.web_url = getattr(live, "web_url", None)
-        self.live_error: str | None = None
-
-    # meshcat's Visualizer calls window.send(command)
-    def send(self, command) -> None:
-        import umsgpack
-
-        data = command.lower()
-        self.send_packed(data["type"], data.get("path", ""), umsgpack.packb(data))
-
-    def send_packed(self, kind: str, path: str, packed: bytes) -> None:
-        """Record one command (and forward it when live)."""
-        self._record(kind, path, packed)
-        self._forward(kind, path, packed)
-        for listener in self.listeners:
-            listener(kind, path, packed)
-
-    def _record(self, kind, path, packed) -> None:
-        parts = _split(path)
-        item = (kind, path, packed)
-        if kind == "set_object":
-            node = self.tree.find(parts)
-            node.object = item
-            node.properties = {}
-        elif kind == "set_transform":
-            self.tree.find(parts).transform = item
-        elif kind == "set_property":
-            import umsgpack
-
-            key = umsgpack.unpackb(packed)["property"]
-            self.tree.find(parts).properties[key] = item
-        elif kind == "set_animation":
-            self.tree.find(parts).animation = None if packed == _EMPTY_ANIMATION() else item
-        elif kind == "delete":
-            if parts:
-                parent = self.tree.find(parts[:-1])
-                parent.children.pop(parts[-1], None)
-            else:
-                self.tree = _Node()
-        else:  # pragma: no cover - meshcat has no other scene commands
-            raise InvalidParameterError(f"unknown Meshcat command {kind!r}")
-
-    def _forward(self, kind, path, packed) -> None:
-        live = self.live
-        if live is None:
-            return
-        try:
-            live.zmq_socket.send_multipart([kind.encode(), path.encode(), packed])
-            live.zmq_socket.recv()
-        except Exception as exc:  # zmq.Again (timeout) or a closed socket
-            self.live = None
-            self.live_error = f"the live viewer stopped answering ({type(exc).__name__})"
-            try:
-                live.zmq_socket.close(linger=0)
-            except Exception:  # pragma: no cover - already closed
-                pass
-
-    def commands(self) -> list[tuple[str, str, bytes]]:
-        """The scene as a list of commands, in an order that rebuilds it.
-
-        Objects, their properties and transforms node by node (parents first), then
-        the animations (which need the objects to exist).
-        """
-        out, animations = [], []
-        for node in self.tree.walk():
-            if node.object is not None:
-                out.append(node.object)
-            out.extend(node.properties.values())
-            if node.transform is not None:
-                out.append(node.transform)
-            if node.animation is not None:
-                animations.append(node.animation)
-        return out + animations
-
-    def get_scene(self) -> str:
-        """The recorded scene as a self-contained page (``meshcat.Visualizer.static_html``)."""
-        data = base64.b64encode(_frame_commands(self.commands())).decode("ascii")
-        chunk = f'<script type="application/octet-stream" class="scene-data">{data}</script>'
-        return _page("MeshCat", chunk, "", "")
-
-    def replay_to_live(self, clear: str | None = None) -> None:
-        """Send the whole recorded scene to the live viewer (after ``delete clear``)."""
-        if self.live is None:
-            return
-        if clear is not None:
-            self._forward("delete", clear, _DELETE(clear))
-        has_animation = False
-        for kind, path, packed in self.commands():
-            self._forward(kind, path, packed)
-            has_animation |= kind == "set_animation"
-        if not has_animation:
-            self._forward("set_animation", "", _EMPTY_ANIMATION())
-
-
-@lru_cache(maxsize=1)
-def _EMPTY_ANIMATION() -> bytes:  # noqa: N802 - a constant, computed once
-    import umsgpack
-
-    empty = {"type": "set_animation", "animations": [], "options": {"play": False}, "path": ""}
-    return umsgpack.packb(empty)
-
-
-def _DELETE(path: str) -> bytes:  # noqa: N802 - like _EMPTY_ANIMATION
-    import umsgpack
-
-    return umsgpack.packb({"type": "delete", "path": path})
-
-
-def _frame_commands(commands) -> bytes:
-    """Commands as length-prefixed msgpack blobs, gzipped."""
-    raw = b"".join(struct.pack(">I", len(c[2])) + c[2] for c in commands)
-    return gzip.compress(raw, compresslevel=6, mtime=0)
-
-
-# --------------------------------------------------------------------------- the robot
-
-
-@dataclass(frozen=True)
-class _RobotMeshes:
-    """The robot's visual meshes as recorded Meshcat commands, built once per process."""
-
-    commands: tuple  # (kind, path, packed) set_object commands
-    gz: bytes  # their gzipped frames, for the in-notebook viewer
-    chunk: str  # the same in base64, for static pages
-    node_names: tuple  # Meshcat path (under ROOT) of each visual geometry
-
-
-_ROBOT_LOCK = threading.Lock()
-
-
-@lru_cache(maxsize=2)
-def _robot_meshes(name: str) -> _RobotMeshes:
-    import contextlib
-    import io
-    import warnings
-
-    import meshcat
-    from pinocchio.visualize import MeshcatVisualizer
-
-    from ..robot import load_robot
-
-    robot = load_robot(name)
-    rec = SceneRecorder()
-    viz = MeshcatVisualizer(robot.model, None, robot.visual_model)
-    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
-        warnings.simplefilter("ignore")
-        viz.initViewer(viewer=meshcat.Visualizer(window=rec))
-        viz.loadViewerModel(rootNodeName="robot")
-    objects = tuple(c for c in rec.commands() if c[0] == "set_object")
-    names = tuple(f"robot/visuals/{g.name}" for g in robot.visual_model.geometryObjects)
-    gz = _frame_commands(objects)
-    return _RobotMeshes(objects, gz, base64.b64encode(gz).decode("ascii"), names)
-
-
-def robot_meshes(name: str = "panda") -> _RobotMeshes:
-    with _ROBOT_LOCK:
-        return _robot_meshes(name)
-
-
-# --------------------------------------------------------------------------- modes
-
-
-def choose_mode(mode: str = "auto") -> str:
-    """``"live"`` or ``"static"`` for ``mode`` in {"auto", "live", "static"}.
-
-    Auto is static when headless (``TUTOR_HEADLESS=1``), behind JupyterHub or on
-    Binder, or in Voila opened from another machine (the live viewer is on the
-    kernel's loopback, out of reach of a browser elsewhere), and live otherwise.
-    """
-    if mode not in ("auto", "live", "static"):
-        raise InvalidParameterError(f"mode must be 'auto', 'live' or 'static', got {mode!r}")
-    if mode != "auto":
-        return mode
-    remote = any(k in os.environ for k in ("JUPYTERHUB_SERVICE_PREFIX", "BINDER_SERVICE_HOST"))
-    voila = os.environ.get("VOILA_REQUEST_URL")  # the address the browser asked Voila for
-    if voila and urlparse(voila).hostname not in ("127.0.0.1", "localhost", "::1"):
-        remote = True
-    return "static" if headless() or remote else "live"
 
 
 @dataclass(frozen=True)
@@ -435,10 +209,7 @@ class Scene3D:
     # ------------------------------------------------------------------ building
 
     def _draw_static_scene(self) -> None:
-        import meshcat.geometry as mg
         import meshcat.transformations as tf
-
-        from ..robot import scene_obstacles
 
         vis, sc = self.vis, self.scene
         vis["/Grid"].set_property("visible", False)
@@ -446,34 +217,13 @@ class Scene3D:
         vis.set_transform(tf.translation_matrix(-self.scene_centre()))
         x, y, z = CAMERA_POSITION
         vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
-        colours = {"table": TABLE, "tray": TRAY}
-        for name, center, size in scene_obstacles(sc):
-            node = "lfd/" + name.replace(" ", "_")
-            colour = colours.get(name, BIN)
-            vis[node].set_object(mg.Box(list(size)), mg.MeshLambertMaterial(color=_hex(colour)))
-            vis[node].set_transform(tf.translation_matrix(center))
-        upright = tf.rotation_matrix(np.pi / 2, [1, 0, 0])  # meshcat cylinders run along y
-        stem = sc.plant_height
-        for i, p in enumerate(sc.plant_positions):
-            base = np.array([p[0], p[1], sc.tray_top])
-            node = vis[f"lfd/plants/{i}"]
-            node.set_transform(tf.translation_matrix(base))
-            node["stem"].set_object(
-                mg.Cylinder(stem, 0.5 * sc.plant_radius),
-                mg.MeshLambertMaterial(color=_hex(STEM)),
-            )
-            node["stem"].set_transform(tf.translation_matrix([0, 0, stem / 2]) @ upright)
-        self._ball = mg.Sphere(min(0.4 * sc.pitch, 1.6 * sc.plant_radius))
+        draw_fixtures(vis, sc)
+        self._ball = plant_ball(sc)
         if self._robot is not None:
             for kind, path, packed in self._robot.commands:
                 self.recorder.send_packed(kind, path, packed)
             self.show_configuration(sc.start_configuration)
-        hand = vis["lfd/hand"]
-        hand["open"].set_object(mg.Sphere(0.016), mg.MeshLambertMaterial(color=_hex(HAND_OPEN)))
-        hand["closed"].set_object(mg.Sphere(0.016), mg.MeshLambertMaterial(color=_hex(HAND_CLOSED)))
-        hand["closed"].set_transform(tf.scale_matrix(1e-3))
-        p, _ = self._get_arm().fk(sc.start_configuration)
-        hand.set_transform(tf.translation_matrix(p))
+        draw_hand(vis, self._get_arm().fk(sc.start_configuration)[0])
 
     def scene_centre(self) -> np.ndarray:
         """The point the camera looks at (3,): between the tray and the bin, a little
@@ -529,7 +279,9 @@ class Scene3D:
         top = tf.translation_matrix([0, 0, self.scene.plant_height])
         for i in np.flatnonzero(s != self._status):
             ball = self.vis[f"lfd/plants/{i}/ball"]
-            ball.set_object(self._ball, mg.MeshLambertMaterial(color=_hex(STATUS_COLOURS[s[i]])))
+            ball.set_object(
+                self._ball, mg.MeshLambertMaterial(color=hex_colour(STATUS_COLOURS[s[i]]))
+            )
             ball.set_transform(top)
         self._status = s.copy()
 
@@ -544,7 +296,7 @@ class Scene3D:
             node[str(j)].set_object(
                 mg.Line(
                     mg.PointsGeometry(P.T.astype(np.float32)),
-                    mg.LineBasicMaterial(color=_hex(colour), linewidth=2),
+                    mg.LineBasicMaterial(color=hex_colour(colour), linewidth=2),
                 )
             )
 
@@ -595,7 +347,7 @@ class Scene3D:
 
     def clear_animation(self) -> None:
         """Stop any animation and put the robot back at the start configuration."""
-        self.recorder.send_packed("set_animation", "", _EMPTY_ANIMATION())
+        self.recorder.send_packed("set_animation", "", empty_animation())
         self.vis["lfd/trails/animated"].delete()
         self.show_configuration(self.scene.start_configuration)
         p, _ = self._get_arm().fk(self.scene.start_configuration)
@@ -633,7 +385,7 @@ class Scene3D:
         key = (
             id(session),
             len(session.events),
-            len(session.meta.get("tests", [])),
+            len(_tests_after(run)),
             run.finished,
             tuple(np.asarray(status, dtype=object).ravel()),
         )
@@ -678,7 +430,7 @@ class Scene3D:
         rec = run.session.latest
         if rec is None or len(shown) == 0:
             return None
-        tests = [t for t in run.session.meta.get("tests", []) if t["after_demo"] == rec.n_demos]
+        tests = _tests_after(run, rec.n_demos)
         if tests and tests[-1]["plants"]:
             return int(tests[-1]["plants"][-1])
         own = run.task.nearest_condition(run.session.conditions[-1])
@@ -701,8 +453,8 @@ class Scene3D:
             return
         with _LIVE_LOCK:
             if fresh:
-                rec._forward("delete", DYNAMIC, _DELETE(DYNAMIC))
-                rec._forward("set_animation", "", _EMPTY_ANIMATION())
+                rec.forward("delete", DYNAMIC, delete_command(DYNAMIC))
+                rec.forward("set_animation", "", empty_animation())
                 _LIVE_OWNER = self
             elif _LIVE_OWNER is not self:
                 rec.replay_to_live(clear=DYNAMIC)
@@ -725,7 +477,7 @@ class Scene3D:
             robot_ids = {id(c[2]) for c in self._robot.commands}
             chunks.append(self._robot.gz)
         rest = [c for c in self.recorder.commands() if id(c[2]) not in robot_ids]
-        chunks.append(_frame_commands(rest))
+        chunks.append(frame_commands(rest))
         return chunks
 
     def static_html(self, title: str = "lfd-tutor: pick and place in 3-D") -> str:
@@ -733,14 +485,8 @@ class Scene3D:
         chunks = self._scene_chunks()
         if self._robot is not None:  # its base64 is cached too
             chunks[0] = self._robot.chunk
-        data = "".join(
-            '<script type="application/octet-stream" class="scene-data">'
-            + (c if isinstance(c, str) else base64.b64encode(c).decode("ascii"))
-            + "</script>"
-            for c in chunks
-        )
         caption = html.escape(self.animation.label if self.animation else "")
-        return _page(title, data, self.legend_html(), caption)
+        return page(title, scene_data(chunks), self.legend_html(), caption)
 
     def save_html(self, path) -> Path:
         """Write :meth:`static_html` to ``path``; returns the path."""
@@ -777,7 +523,7 @@ class Scene3D:
             url = html.escape(self.recorder.web_url or "")
             style = f"width:100%;height:{self.height}px;border:1px solid #ccc"
             return w.HTML(f"<iframe src='{url}' style='{style}'></iframe>")
-        view = _viewer_widget_class()(height=self.height, page=_page("3-D view", "", "", ""))
+        view = viewer_widget_class()(height=self.height, page=page("3-D view", "", "", ""))
         view.on_msg(self._on_view_msg)
         self.recorder.listeners.append(self._collect)
         return view
@@ -794,7 +540,7 @@ class Scene3D:
 
     def _flush(self) -> None:
         if self._pending:
-            self._view.send({"type": "update"}, [_frame_commands(self._pending)])
+            self._view.send({"type": "update"}, [frame_commands(self._pending)])
             self._pending = []
 
     def _caption_html(self) -> str:
@@ -831,7 +577,7 @@ class Scene3D:
         if self._widget is None:
             return
         self._caption.value = self._caption_html()
-        if self.mode == "static" and isinstance(self._view, _viewer_widget_class()):
+        if self.mode == "static" and isinstance(self._view, viewer_widget_class()):
             self._flush()
         elif self.mode == "static":  # the live viewer died: switch to the notebook viewer
             self._view = self._make_view()
@@ -843,124 +589,15 @@ class Scene3D:
         display(self.widget)
 
 
+def _tests_after(run, n_demos: int | None = None) -> list[dict]:
+    """The robot's tests the trainee asked for in ``run``, after ``n_demos`` demos.
+
+    Each test is ``{"after_demo": n, "plants": [...], "after_run": bool}``; all of them
+    when ``n_demos`` is None. The only place the view reads the run record's tests.
+    """
+    tests = run.session.meta.get("tests", [])
+    return list(tests) if n_demos is None else [t for t in tests if t["after_demo"] == n_demos]
+
+
 _LIVE_OWNER: Scene3D | None = None
 _LIVE_LOCK = threading.Lock()
-
-
-@lru_cache(maxsize=1)
-def _viewer_js() -> str:
-    import meshcat
-
-    path = Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
-    return path.read_text(encoding="utf-8").replace("</script", "<\\/script")
-
-
-def _page(title: str, data: str, legend: str, caption: str) -> str:
-    overlay = (
-        f'<div id="lfd-legend">{legend}<div id="lfd-caption">{caption}</div></div>'
-        if legend or caption
-        else ""
-    )
-    return _PAGE.format(title=html.escape(title), viewer=_viewer_js(), data=data, overlay=overlay)
-
-
-@lru_cache(maxsize=1)
-def _viewer_widget_class():
-    import anywidget
-    import traitlets
-
-    class SceneView(anywidget.AnyWidget):
-        """meshcat's viewer in an iframe fed over the widget's comm: the whole scene
-        when a browser opens it, then only the changes (the camera stays put)."""
-
-        _esm = _WIDGET_JS
-        height = traitlets.Int(480).tag(sync=True)
-        page = traitlets.Unicode("").tag(sync=True)
-
-    return SceneView
-
-
-_WIDGET_JS = """
-function render({ model, el }) {
-  const id = Math.random().toString(36).slice(2);
-  const frame = document.createElement("iframe");
-  frame.style.width = "100%";
-  frame.style.height = model.get("height") + "px";
-  frame.style.border = "1px solid #ccc";
-  el.classList.add("lfd-scene3d-view");
-  el.dataset.updates = "0";
-  let ready = false;
-  let chain = Promise.resolve();
-  const apply = (buffers) => {
-    for (const b of buffers) {
-      const bytes = b instanceof ArrayBuffer
-        ? new Uint8Array(b)
-        : new Uint8Array(b.buffer, b.byteOffset, b.byteLength).slice();
-      chain = chain.then(() => frame.contentWindow.lfdApply(bytes));
-    }
-    chain = chain
-      .then(() => { el.dataset.updates = String(Number(el.dataset.updates) + 1); })
-      .catch((err) => { el.dataset.error = String(err); });
-  };
-  const onMsg = (msg, buffers) => {
-    if (msg.type === "full" && msg.to === id) { ready = true; apply(buffers); }
-    else if (msg.type === "update" && ready) { apply(buffers); }
-  };
-  model.on("msg:custom", onMsg);
-  // (re)loaded, e.g. when the page moves the output: ask for the whole scene again
-  frame.addEventListener("load", () => { ready = false; model.send({ type: "hello", id: id }); });
-  frame.srcdoc = model.get("page");
-  el.appendChild(frame);
-  return () => model.off("msg:custom", onMsg);
-}
-export default { render };
-"""
-
-_PAGE = """<!DOCTYPE html>
-<html>
-<head><meta charset="utf-8"><title>{title}</title>
-<style>
-body {{ margin: 0; font-family: sans-serif; }}
-#meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
-#lfd-legend {{ position: absolute; left: 6px; top: 6px; background: rgba(255,255,255,.85);
-  padding: 4px 8px 4px 0; border-radius: 4px; max-width: 92vw; }}
-#lfd-caption {{ font-size: 12px; margin: 3px 0 0 10px; }}
-</style></head>
-<body>
-<div id="meshcat-pane"></div>
-{overlay}
-{data}
-<script>{viewer}</script>
-<script>
-var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
-// Apply gzipped, length-prefixed msgpack commands, in order.
-async function lfdApply(gz) {{
-  const stream = new Blob([gz]).stream().pipeThrough(new DecompressionStream("gzip"));
-  const buf = new Uint8Array(await new Response(stream).arrayBuffer());
-  const view = new DataView(buf.buffer);
-  let i = 0;
-  while (i < buf.length) {{
-    const n = view.getUint32(i);
-    viewer.handle_command_bytearray(buf.slice(i + 4, i + 4 + n));
-    i += 4 + n;
-  }}
-}}
-function lfdCaption(text) {{
-  const el = document.getElementById("lfd-caption");
-  if (el) el.textContent = text;
-}}
-window.lfdApply = lfdApply;
-window.lfdCaption = lfdCaption;
-(async function () {{
-  for (const el of document.querySelectorAll("script.scene-data")) {{
-    await lfdApply(Uint8Array.from(atob(el.textContent), c => c.charCodeAt(0)));
-  }}
-  document.body.dataset.ready = "1";
-}})().catch(function (err) {{
-  document.body.dataset.ready = "error";
-  lfdCaption("This browser could not unpack the 3-D scene: " + err);
-}});
-</script>
-</body>
-</html>
-"""

@@ -1,0 +1,148 @@
+"""The 3-D scene's geometry: the robot's meshes, the table, tray, bin, plants and hand.
+
+The robot's visual meshes come from example-robot-data through Pinocchio's
+``MeshcatVisualizer`` (which only loads them here: where they are placed is
+:meth:`tutor.robot.Arm.visual_placements`), recorded once per process as Meshcat
+commands so every scene reuses them. The rest are meshcat primitives drawn from a
+:class:`~tutor.tasks.pickplace.PickPlaceScene`: the obstacle boxes of
+:func:`tutor.robot.scene_obstacles` (table, tray, bin floor and walls), a stem per
+plant (its status ball is the drawing's, :mod:`tutor.views.scene3d`), and the hand
+marker, one ball for open and one for closed.
+"""
+
+from __future__ import annotations
+
+import base64
+import threading
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from .meshcat_recorder import SceneRecorder, frame_commands
+
+__all__ = [
+    "RobotMeshes",
+    "robot_meshes",
+    "draw_fixtures",
+    "draw_hand",
+    "plant_ball",
+    "hex_colour",
+    "HAND_OPEN",
+    "HAND_CLOSED",
+]
+
+HAND_OPEN = "#e6ab02"  #: the hand marker while the hand is open (yellow)
+HAND_CLOSED = "#7b3294"  #: ... while it is closed, holding a plant (purple)
+TABLE = "#c8b08a"
+TRAY = "#5b5b5b"
+BIN = "#8c8c8c"
+STEM = "#5a7a3a"
+HAND_RADIUS = 0.016  # m
+
+
+def hex_colour(colour: str) -> int:
+    """``"#rrggbb"`` as the integer meshcat's materials take."""
+    return int(colour.lstrip("#"), 16)
+
+
+@dataclass(frozen=True)
+class RobotMeshes:
+    """The robot's visual meshes as recorded Meshcat commands, built once per process."""
+
+    commands: tuple  # (kind, path, packed) set_object commands
+    gz: bytes  # their gzipped frames, for the in-notebook viewer
+    chunk: str  # the same in base64, for static pages
+    node_names: tuple  # Meshcat path (under the root) of each visual geometry
+
+
+_ROBOT_LOCK = threading.Lock()
+
+
+@lru_cache(maxsize=2)
+def _robot_meshes(name: str) -> RobotMeshes:
+    import contextlib
+    import io
+    import warnings
+
+    import meshcat
+    from pinocchio.visualize import MeshcatVisualizer
+
+    from ..robot import load_robot
+
+    robot = load_robot(name)
+    rec = SceneRecorder()
+    viz = MeshcatVisualizer(robot.model, None, robot.visual_model)
+    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+        warnings.simplefilter("ignore")
+        viz.initViewer(viewer=meshcat.Visualizer(window=rec))
+        viz.loadViewerModel(rootNodeName="robot")
+    objects = tuple(c for c in rec.commands() if c[0] == "set_object")
+    names = tuple(f"robot/visuals/{g.name}" for g in robot.visual_model.geometryObjects)
+    gz = frame_commands(objects)
+    return RobotMeshes(objects, gz, base64.b64encode(gz).decode("ascii"), names)
+
+
+def robot_meshes(name: str = "panda") -> RobotMeshes:
+    """The meshes of the example-robot-data robot ``name`` (loaded once, thread-safe).
+
+    ``node_names`` is in the order of the robot's visual model, the order of
+    :meth:`tutor.robot.Arm.visual_placements`.
+    """
+    with _ROBOT_LOCK:
+        return _robot_meshes(name)
+
+
+def draw_fixtures(vis, scene) -> None:
+    """Draw what never moves under ``lfd/``: table, tray, bin and a stem per plant.
+
+    Parameters
+    ----------
+    vis : meshcat.Visualizer
+    scene : PickPlaceScene
+    """
+    import meshcat.geometry as mg
+    import meshcat.transformations as tf
+
+    from ..robot import scene_obstacles
+
+    colours = {"table": TABLE, "tray": TRAY}
+    for name, center, size in scene_obstacles(scene):
+        node = "lfd/" + name.replace(" ", "_")
+        colour = colours.get(name, BIN)
+        vis[node].set_object(mg.Box(list(size)), mg.MeshLambertMaterial(color=hex_colour(colour)))
+        vis[node].set_transform(tf.translation_matrix(center))
+    upright = tf.rotation_matrix(np.pi / 2, [1, 0, 0])  # meshcat cylinders run along y
+    stem = scene.plant_height
+    for i, p in enumerate(scene.plant_positions):
+        base = np.array([p[0], p[1], scene.tray_top])
+        node = vis[f"lfd/plants/{i}"]
+        node.set_transform(tf.translation_matrix(base))
+        node["stem"].set_object(
+            mg.Cylinder(stem, 0.5 * scene.plant_radius),
+            mg.MeshLambertMaterial(color=hex_colour(STEM)),
+        )
+        node["stem"].set_transform(tf.translation_matrix([0, 0, stem / 2]) @ upright)
+
+
+def plant_ball(scene):
+    """The sphere on top of each plant's stem (coloured by status), a meshcat geometry."""
+    import meshcat.geometry as mg
+
+    return mg.Sphere(min(0.4 * scene.pitch, 1.6 * scene.plant_radius))
+
+
+def draw_hand(vis, position) -> None:
+    """The hand marker ``lfd/hand`` at ``position`` (3,): open ball shown, closed hidden."""
+    import meshcat.geometry as mg
+    import meshcat.transformations as tf
+
+    hand = vis["lfd/hand"]
+    hand["open"].set_object(
+        mg.Sphere(HAND_RADIUS), mg.MeshLambertMaterial(color=hex_colour(HAND_OPEN))
+    )
+    hand["closed"].set_object(
+        mg.Sphere(HAND_RADIUS), mg.MeshLambertMaterial(color=hex_colour(HAND_CLOSED))
+    )
+    hand["closed"].set_transform(tf.scale_matrix(1e-3))
+    hand.set_transform(tf.translation_matrix(position))

@@ -1,0 +1,36 @@
+// The notebook's 3-D viewer (anywidget ESM of tutor/views/scene_page.py): meshcat's
+// page in an iframe, fed over the widget's comm. On (re)load it says hello; the kernel
+// answers with the whole scene for this view id, then sends only what changed.
+function render({ model, el }) {
+  const id = Math.random().toString(36).slice(2);
+  const frame = document.createElement("iframe");
+  frame.style.width = "100%";
+  frame.style.height = model.get("height") + "px";
+  frame.style.border = "1px solid #ccc";
+  el.classList.add("lfd-scene3d-view");
+  el.dataset.updates = "0";
+  let ready = false;
+  let chain = Promise.resolve();
+  const apply = (buffers) => {
+    for (const b of buffers) {
+      const bytes = b instanceof ArrayBuffer
+        ? new Uint8Array(b)
+        : new Uint8Array(b.buffer, b.byteOffset, b.byteLength).slice();
+      chain = chain.then(() => frame.contentWindow.lfdApply(bytes));
+    }
+    chain = chain
+      .then(() => { el.dataset.updates = String(Number(el.dataset.updates) + 1); })
+      .catch((err) => { el.dataset.error = String(err); });
+  };
+  const onMsg = (msg, buffers) => {
+    if (msg.type === "full" && msg.to === id) { ready = true; apply(buffers); }
+    else if (msg.type === "update" && ready) { apply(buffers); }
+  };
+  model.on("msg:custom", onMsg);
+  // (re)loaded, e.g. when the page moves the output: ask for the whole scene again
+  frame.addEventListener("load", () => { ready = false; model.send({ type: "hello", id: id }); });
+  frame.srcdoc = model.get("page");
+  el.appendChild(frame);
+  return () => model.off("msg:custom", onMsg);
+}
+export default { render };
