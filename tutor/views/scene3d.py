@@ -384,8 +384,8 @@ class Scene3D:
         session, task = run.session, run.task
         key = (
             id(session),
-            len(session.events),
-            len(_tests_after(run)),
+            len(run.record.events),
+            len(run.record.attempts),
             run.finished,
             tuple(np.asarray(status, dtype=object).ravel()),
         )
@@ -431,8 +431,8 @@ class Scene3D:
         if rec is None or len(shown) == 0:
             return None
         tests = _tests_after(run, rec.n_demos)
-        if tests and tests[-1]["plants"]:
-            return int(tests[-1]["plants"][-1])
+        if tests and tests[-1].plants:
+            return int(tests[-1].plants[-1])
         own = run.task.nearest_condition(run.session.conditions[-1])
         if own in set(int(p) for p in rec.shown):
             return int(own)
@@ -589,14 +589,12 @@ class Scene3D:
         display(self.widget)
 
 
-def _tests_after(run, n_demos: int | None = None) -> list[dict]:
-    """The robot's tests the trainee asked for in ``run``, after ``n_demos`` demos.
-
-    Each test is ``{"after_demo": n, "plants": [...], "after_run": bool}``; all of them
-    when ``n_demos`` is None. The only place the view reads the run record's tests.
-    """
-    tests = run.session.meta.get("tests", [])
-    return list(tests) if n_demos is None else [t for t in tests if t["after_demo"] == n_demos]
+def _tests_after(run, n_demos: int | None = None) -> list:
+    """The robot's tests the trainee asked for in ``run``'s current attempt, after
+    ``n_demos`` demos (all of them when None): :class:`~tutor.framework.record.Test`
+    records, read from the typed run record."""
+    tests = run.attempt.tests
+    return list(tests) if n_demos is None else [t for t in tests if t.after_demo == n_demos]
 
 
 _LIVE_OWNER: Scene3D | None = None
