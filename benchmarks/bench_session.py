@@ -8,6 +8,11 @@ Pick-and-place (Experiment 2): the same step with a refit from scratch (K = 9,
 a demo: 100 reproductions plus criteria (i) (feasibility map, with the hand state),
 (ii) and (iii) with the delta rule (target <= 100 ms).
 
+The trainee's whole step on the maze (what a finished stroke costs in the tutor): the
+same ``add_demo`` through the run (:class:`~tutor.tasks.maze_run.MazeRun`, which also
+extends the typed run record), then the autosave of the record (JSON, temp file, fsync,
+rename, fsync of the folder).
+
 Each figure is the median over several random demo sets and repeats (the session is
 copied before each timed step, so every repeat adds the same M-th demo).
 
@@ -19,6 +24,7 @@ from __future__ import annotations
 import argparse
 import copy
 import json
+import tempfile
 import time
 from pathlib import Path
 
@@ -26,6 +32,7 @@ import numpy as np
 
 from tutor.framework import TeachingSession
 from tutor.tasks.maze import MazeTask
+from tutor.tasks.maze_run import MazeRun
 from tutor.tasks.pickplace import PickPlaceTask
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_session.json"
@@ -52,6 +59,37 @@ def run(repeats: int = 9, n_sets: int = 5, steps=(5, 10, 20)) -> dict:
             "add_demo_ms": 1e3 * float(np.median(times)),
             "add_demo_ms_p90": 1e3 * float(np.percentile(times, 90)),
         }
+    return out
+
+
+def run_recorded(repeats: int = 9, n_sets: int = 5, steps=(5, 10, 20)) -> dict:
+    """The trainee's step: ``MazeRun.add_demo`` (session + record), then the autosave."""
+    task = MazeTask()
+    out = {}
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "VF.json"
+        for m in steps:
+            add_times, save_times = [], []
+            for s in range(n_sets):
+                rng = np.random.default_rng(10_000 + 100 * m + s)
+                starts = task.layout.sample_starts(m, rng)
+                demos = [task.layout.reference_path(p, rng, jitter=0.004) for p in starts]
+                run_ = MazeRun.new("VF", task)
+                for d in demos[:-1]:
+                    run_.add_demo(d)
+                for _ in range(repeats):
+                    trial = copy.deepcopy(run_)
+                    t0 = time.perf_counter()
+                    trial.add_demo(demos[-1])
+                    t1 = time.perf_counter()
+                    trial.save(path)
+                    add_times.append(t1 - t0)
+                    save_times.append(time.perf_counter() - t1)
+            out[m] = {
+                "run_add_demo_ms": 1e3 * float(np.median(add_times)),
+                "autosave_ms": 1e3 * float(np.median(save_times)),
+                "autosave_kb": path.stat().st_size / 1e3,
+            }
     return out
 
 
@@ -110,6 +148,15 @@ def main(argv=None) -> None:
     print(f"{'demo M':>7} {'median ms':>10} {'90th pct ms':>12}")
     for m, r in maze.items():
         print(f"{m:>7} {r['add_demo_ms']:10.1f} {r['add_demo_ms_p90']:12.1f}")
+    recorded = run_recorded(args.repeats, args.sets)
+    print("\nThe trainee's step on the maze: MazeRun.add_demo (session + run record), then")
+    print("the autosave of the record (atomic, fsynced), medians")
+    print(f"{'demo M':>7} {'add_demo ms':>12} {'autosave ms':>12} {'file kB':>8}")
+    for m, r in recorded.items():
+        print(
+            f"{m:>7} {r['run_add_demo_ms']:12.1f} {r['autosave_ms']:12.1f} "
+            f"{r['autosave_kb']:8.0f}"
+        )
     pick = run_pickplace(args.repeats, max(1, min(args.sets, 3)))
     print("\nPick-and-place: add_demo (refit from scratch + 100 plants judged) and the")
     print("judgement of all 100 plants alone (reproduction + criteria (i)-(iii)), medians")
@@ -119,7 +166,7 @@ def main(argv=None) -> None:
             f"{m:>7} {r['add_demo_ms']:12.1f} {r['add_demo_ms_p90']:12.1f} "
             f"{r['judge_100_plants_ms']:13.1f}"
         )
-    results = {"maze": maze, "pickplace": pick}
+    results = {"maze": maze, "maze_recorded": recorded, "pickplace": pick}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(results, indent=2))
     print(f"written to {args.out}")
