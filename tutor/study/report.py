@@ -127,7 +127,8 @@ def format_report(result: CohortResult, analysis: dict) -> str:
             + "; the paper rounds to 'about 180 %'"
         )
         good = int((result.runs.query("condition == 'NF'").reached_target).sum())
-        lines.append(f"NF teachers reaching 90 %: {good} of {n} (paper: 7 of 30 did well)")
+        well, of = paper.EXPERIMENT_1["did_well_without_feedback"], paper.EXPERIMENT_1["n"]
+        lines.append(f"NF teachers reaching 90 %: {good} of {n} (paper: {well} of {of} did well)")
     else:
         a, pa = st["anova"], paper.EXPERIMENT_2["mixed_anova"]
         for key in ("condition", "run", "interaction"):
