@@ -154,9 +154,20 @@ def test_plan_weighing_places_spreads_demos_out():
         return np.linalg.norm(picks - pts[60], axis=1).mean()
 
     assert mean_gap(3) > 1.3 * mean_gap(1)  # the farthest of three lands farther away
-    person = traits(enough_maze=3, plan_spread_maze=0.3, plan_choices_maze=4)
-    first = TeacherModel(person, np.random.default_rng(1), pts, (0, 0), (10, 10), "maze")
-    assert first.plan_point(avoid=[]) is not None  # nothing given yet: the first place
+    # nothing given yet: nothing to weigh, so the first place drawn, as with one choice
+    firsts = [
+        TeacherModel(
+            traits(enough_maze=3, plan_spread_maze=0.3, plan_choices_maze=choices),
+            np.random.default_rng(1),
+            pts,
+            (0, 0),
+            (10, 10),
+            "maze",
+        ).plan_point(avoid=[])
+        for choices in (4, 1)
+    ]
+    np.testing.assert_array_equal(firsts[0], firsts[1])
+    assert firsts[0].shape == (2,) and np.all((firsts[0] >= 0) & (firsts[0] <= 10))
     assert DEFAULT_POPULATION.sample(np.random.default_rng(0)).plan_choices("maze") == 1
     assert DEFAULT_POPULATION.sample(np.random.default_rng(0)).plan_choices("pickplace") == 2
     with pytest.raises(InvalidParameterError, match="plan_choices"):
@@ -196,18 +207,46 @@ def test_vr_maze_teacher_follows_the_rules(maze):
     s = MazeTeacher(traits(), maze).teach("VR", np.random.default_rng(5))
     assert s.meta["followed_rules"] and all(s.meta["followed_rules"])
     # replay the rules: demo 2 starts within 4 cm of demo 1 (rule 2)
+    assert s.meta["targets"][:2] == ["rule 1", "rule 2"]
     first = maze.condition_of(s.demos[0])
     advice = advise_from(maze, s.history[0].passed, first)
-    if advice.rule == 2:
-        assert np.linalg.norm(maze.condition_of(s.demos[1]) - first) <= advice.radius + 1e-9
+    assert advice.rule == 2  # one demo cannot surround its start with green
+    assert np.linalg.norm(maze.condition_of(s.demos[1]) - first) <= advice.radius + 1e-9
 
 
 def test_maze_teacher_same_traits_in_every_condition(maze):
-    teacher = MazeTeacher(traits(), maze)
+    person = traits(enough_maze=3, patience=6, motor_noise=0.002)
+    teacher = MazeTeacher(person, maze)
     runs = {c: teacher.teach(c, np.random.default_rng(11)) for c in ("NF", "VF", "VR")}
     assert all(s.meta["condition"] == c for c, s in runs.items())
+    assert teacher.traits == person  # teaching changes no trait
+    # the same person's traits act in every condition: NF stops at their prior,
+    # every run within their patience, every first demo from the same plan
+    assert runs["NF"].n_demos == person.enough_maze
+    assert all(s.n_demos <= person.patience for s in runs.values())
+    again = MazeTeacher(person, maze).teach("VF", np.random.default_rng(11))
+    np.testing.assert_array_equal(again.demos[0], runs["VF"].demos[0])
     with pytest.raises(InvalidParameterError, match="NF, VF, VR"):
         teacher.teach("BF", np.random.default_rng(0))
+
+
+def _trait_columns(rows: list[dict]) -> pd.DataFrame:
+    table = pd.DataFrame(rows)
+    return table[[c for c in table.columns if c.startswith("trait_")]]
+
+
+@pytest.mark.parametrize("experiment, runs", [(1, 3), (2, 3)])
+def test_cohort_teacher_keeps_its_traits_in_every_run(experiment, runs):
+    """Within subjects (Experiment 1) and across the three runs (Experiment 2), every run
+    of one simulated teacher records the same traits; another teacher's differ."""
+    from tutor.study.cohort import simulate_teacher
+
+    n = 2 if experiment == 1 else 8
+    tables = [_trait_columns(simulate_teacher(experiment, k, 5, n)[0]) for k in (0, 1)]
+    for table in tables:
+        assert len(table) == runs and table.shape[1] > 5
+        assert (table.nunique() == 1).all(), table.T
+    assert not tables[0].iloc[0].equals(tables[1].iloc[0])
 
 
 def test_maze_slip_makes_an_incorrect_demo(maze):
@@ -245,10 +284,13 @@ def test_bf_teacher_pays_125_s_per_demo_under_the_cap(pickplace):
     assert all(len(r.shown) == 5 for r in s.history)
     robot = 125.0 * s.n_demos
     assert run.elapsed >= robot + sum(s.meta["demo_seconds"]) + 30.0 * s.n_demos - 1e-6
-    if s.meta["why_stopped"] == "time":
-        assert run.elapsed >= run.cap
-        # 30 s setup + ~10 s demo + 125 s: at most 6 demos fit in 15 minutes
-        assert s.n_demos <= 6
+    # a slow set-up runs out of the 15 minutes: 300 s + ~10 s demo + 125 s each, so no
+    # more than 3 demos start before the cap
+    slow = PickPlaceTeacher(dataclasses.replace(t, setup_seconds=300.0), pickplace)
+    late = slow.teach("BF", np.random.default_rng(6))
+    assert late.session.meta["why_stopped"] == "time"
+    assert late.elapsed >= late.cap
+    assert 1 <= late.session.n_demos <= 3
 
 
 def test_sf_teacher_picks_tests_near_its_demos(pickplace):
@@ -335,9 +377,14 @@ def test_bad_requests_are_named_errors(experiment, n, seed, match):
 def test_cli_reports_bad_input_and_writes_results(tmp_path, capsys):
     from tutor.__main__ import main
 
-    assert main(["reproduce", "--experiment", "3", "--out", str(tmp_path)]) == 2
+    for bad in (["--experiment", "3"], ["--experiment", "1", "--seed", "-2"]):
+        with pytest.raises(SystemExit) as info:  # argparse's refusal, exit code 2
+            main(["reproduce", *bad, "--out", str(tmp_path)])
+        assert info.value.code == 2
+        assert "error: argument --" in capsys.readouterr().err
+    assert main(["reproduce", "--experiment", "2", "--n", "6", "--out", str(tmp_path)]) == 2
     assert "InvalidParameterError" in capsys.readouterr().err
-    assert main(["reproduce", "--experiment", "1", "--seed", "-2", "--out", str(tmp_path)]) == 2
+    assert list(tmp_path.iterdir()) == []  # refused before anything was written
     code = main(
         [
             "reproduce",
@@ -357,10 +404,13 @@ def test_cli_reports_bad_input_and_writes_results(tmp_path, capsys):
     assert code == 0
     out = capsys.readouterr().out
     assert "paper" in out and "Repeated-measures ANOVA" in out
-    for name in ("runs.csv", "demos.csv", "summary.json", "report.txt", ".png"):
-        assert (tmp_path / f"experiment1_{name}").exists() or (
-            tmp_path / f"experiment1{name}"
-        ).exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "experiment1.png",
+        "experiment1_demos.csv",
+        "experiment1_report.txt",
+        "experiment1_runs.csv",
+        "experiment1_summary.json",
+    ]
 
 
 # --------------------------------------------------------------------------- statistics

@@ -348,7 +348,10 @@ def simple():
         (lambda d: d[::-1], InvalidDemoError, "increasing"),
         (lambda d: np.vstack([d[:5], d[4:]]), InvalidDemoError, "increasing"),
         (lambda d: d.ravel(), InvalidDemoError, "2-D"),
-        (lambda d: "not a demo", InvalidDemoError, "numeric"),
+        (lambda d: "not a demo", InvalidDemoError, "text"),
+        (lambda d: [list(r) for r in d[:3]] + [[1.0]], InvalidDemoError, "numeric"),
+        (lambda d: d + 1j, InvalidDemoError, "complex"),
+        (lambda d: d.astype(str), InvalidDemoError, "text"),
     ],
 )
 def test_bad_demo_raises_named_error(simple, mutate, error, words):
@@ -430,3 +433,152 @@ def test_failed_fit_leaves_model_unchanged(simple):
     with pytest.raises(InvalidDemoError):
         model.fit([demo, demo[:1]], [frames, frames])
     np.testing.assert_array_equal(model.means_, before)
+
+
+# --- settings of the wrong type are refused when the model is made, naming the setting
+
+BAD_SETTINGS = [
+    ("n_components", True),
+    ("n_components", "3"),
+    ("n_components", 3.0),
+    ("max_iter", False),
+    ("max_iter", "100"),
+    ("reg_covar", "1e-3"),
+    ("reg_covar", True),
+    ("reg_covar", 1e-3 + 0j),
+    ("reg_covar", float("nan")),
+    ("tol", "0"),
+    ("tol", None),
+    ("warm_start", "no"),
+    ("warm_start", 1),
+    ("init_params", 1),
+    ("random_state", "3"),
+    ("random_state", True),
+    ("random_state", 1.5),
+    ("random_state", -1),
+]
+
+
+@pytest.mark.parametrize("name, value", BAD_SETTINGS)
+def test_setting_of_the_wrong_type_is_refused(name, value):
+    with pytest.raises(InvalidParameterError, match=name):
+        TPGMM(**{name: value})
+
+
+@pytest.mark.parametrize("name, value", BAD_SETTINGS)
+def test_setting_changed_after_construction_is_refused_by_fit(simple, name, value):
+    demo, frames = simple
+    model = TPGMM(2)
+    setattr(model, name, value)
+    with pytest.raises(InvalidParameterError, match=name):
+        model.fit([demo], [frames])
+    assert not hasattr(model, "weights_")
+
+
+def test_numpy_scalars_and_seeds_are_accepted(simple):
+    demo, frames = simple
+    for seed in (np.int64(3), np.random.default_rng(3), np.random.SeedSequence(3)):
+        model = TPGMM(
+            np.int64(2),
+            reg_covar=np.float32(1e-3),
+            max_iter=np.int32(50),
+            warm_start=np.bool_(False),
+            init_params="random",
+            random_state=seed,
+        ).fit([demo], [frames])
+        assert model.weights_.shape == (2,)
+
+
+_anything_but_a_count = (
+    st.booleans()
+    | st.text(max_size=5)
+    | st.floats(allow_nan=True)
+    | st.complex_numbers()
+    | st.none()
+    | st.lists(st.integers(), max_size=3)
+)
+_anything_but_a_number = (
+    st.booleans()
+    | st.text(max_size=5)
+    | st.complex_numbers()
+    | st.none()
+    | st.lists(st.floats(), max_size=3)
+    | st.floats(allow_nan=True).filter(lambda v: not np.isfinite(v) or v < 0)
+)
+BAD_VALUES = {
+    "n_components": _anything_but_a_count,
+    "max_iter": _anything_but_a_count,
+    "reg_covar": _anything_but_a_number,
+    "tol": _anything_but_a_number,
+    "warm_start": st.integers() | st.text(max_size=5) | st.floats() | st.none(),
+    "init_params": st.integers()
+    | st.booleans()
+    | st.none()
+    | st.text(max_size=8).filter(lambda v: v not in ("time", "random")),
+    "random_state": st.booleans()
+    | st.text(max_size=5)
+    | st.floats()
+    | st.integers(max_value=-1)
+    | st.complex_numbers(),
+}
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.sampled_from(sorted(BAD_VALUES)).flatmap(lambda n: st.tuples(st.just(n), BAD_VALUES[n])))
+def test_random_bad_settings_always_give_invalid_parameter_error(setting):
+    name, value = setting
+    with pytest.raises(InvalidParameterError, match=name):
+        TPGMM(**{name: value})
+
+
+# --- frames whose inverse would overflow are refused when the frame is made
+
+
+@pytest.mark.parametrize("scale", [1e-310, 1e-150, 1e-61, 1e61, 1e200])
+def test_frame_of_extreme_scale_is_refused_when_made(scale):
+    with pytest.raises(InvalidFrameError, match="scales lengths"):
+        Frame(scale * np.eye(2), [0.0, 0.0])
+    with pytest.raises(InvalidFrameError, match="scales lengths"):
+        Frame.identity(2).transformed(scale * np.eye(2), [0.0, 0.0])
+
+
+def test_frame_whose_inverse_overflows_is_refused_when_made():
+    # well conditioned overall, but one direction so short that A^-1 is not finite
+    with pytest.raises(InvalidFrameError):
+        Frame([[1e-310, 0.0], [0.0, 1e-310]], [0.0, 0.0])
+    with pytest.raises(InvalidFrameError, match="singular"):
+        Frame([[1.0, 0.0], [0.0, 1e-13]], [0.0, 0.0])
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1e3])
+def test_frames_in_millimetres_or_kilometres_still_fit(simple, scale):
+    demo, _ = simple
+    frames = [Frame(scale * np.eye(2), [0.0, 0.0]), Frame.from_angle([1.0, 1.0], 0.3, scale)]
+    model = TPGMM(2).fit([demo], [frames])
+    mean, _ = model.reproduce(frames, demo[:, 0])
+    assert np.max(np.abs(mean - demo[:, 1:])) < 0.05
+
+
+@pytest.mark.parametrize(
+    "A, b, words",
+    [
+        ([[1 + 1j, 0], [0, 1]], [0.0, 0.0], "complex"),
+        (np.eye(2), np.array([0.0, 1j]), "complex"),
+        (np.eye(2).astype(str), [0.0, 0.0], "text"),
+        (np.eye(2), ["0", "0"], "text"),
+        ("identity", [0.0, 0.0], "text"),
+        ([[1.0, 0.0], [0.0]], [0.0, 0.0], "numeric"),
+    ],
+)
+def test_complex_or_text_frame_is_refused(A, b, words):
+    with pytest.raises(InvalidFrameError, match=words):
+        Frame(A, b)
+
+
+def test_complex_or_text_times_are_refused(simple):
+    demo, frames = simple
+    model = TPGMM(2).fit([demo], [frames])
+    with pytest.raises(InvalidParameterError, match="complex"):
+        model.reproduce(frames, np.linspace(0, 1, 5) + 0j)
+    with pytest.raises(InvalidParameterError, match="text"):
+        model.reproduce(frames, ["0", "0.5", "1"])

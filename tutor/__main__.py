@@ -23,35 +23,69 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 
+def _whole_number(minimum: int):
+    """An argparse type: a whole number >= ``minimum``, with a message saying so."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"must be a whole number >= {minimum}, got {text!r}"
+            ) from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be a whole number >= {minimum}, got {value}")
+        return value
+
+    parse.__name__ = f"whole number >= {minimum}"
+    return parse
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lfd-tutor", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
     def common(p):
         p.add_argument(
-            "--experiment", type=int, required=True, help="1 (maze) or 2 (pick-and-place)"
+            "--experiment",
+            type=int,
+            required=True,
+            choices=(1, 2),
+            help="1 (maze) or 2 (pick-and-place)",
         )
-        p.add_argument("--n", type=int, default=None, help="teachers (default the paper's: 30, 36)")
+        p.add_argument(
+            "--n",
+            type=_whole_number(1),
+            default=None,
+            help="teachers (default the paper's: 30, 36)",
+        )
         p.add_argument("--out", default="results", help="folder for the files (default results/)")
-        p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+        p.add_argument(
+            "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
+        )
         p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
     rep = sub.add_parser("reproduce", help="simulate one experiment and compare with the paper")
     common(rep)
-    rep.add_argument("--seed", type=int, default=0, help="random seed >= 0 (default 0)")
+    rep.add_argument(
+        "--seed", type=_whole_number(0), default=0, help="random seed >= 0 (default 0)"
+    )
     rep.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
     rob = sub.add_parser("robustness", help="rerun an experiment over seeds 0 .. S-1")
     common(rob)
-    rob.add_argument("--seeds", type=int, default=10, help="how many seeds (default 10)")
+    rob.add_argument(
+        "--seeds", type=_whole_number(1), default=10, help="how many seeds (default 10)"
+    )
     return parser
 
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
-    from .errors import InvalidParameterError, TutorError
+    from .errors import SaveError, TutorError
     from .study.cohort import check_request
     from .study.report import (
         analyse,
+        check_out_dir,
         format_report,
         robustness,
         robustness_summary,
@@ -59,8 +93,10 @@ def main(argv=None) -> int:
     )
 
     try:
+        # every argument is checked before the (long) simulation starts
+        check_request(args.experiment, args.n, args.seed if args.command == "reproduce" else 0)
+        check_out_dir(args.out)
         if args.command == "reproduce":
-            check_request(args.experiment, args.n, args.seed)
             from .study.cohort import run_experiment
 
             result = run_experiment(
@@ -75,9 +111,6 @@ def main(argv=None) -> int:
             paths = save_result(result, analysis, args.out, figures=not args.no_figures)
             print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
         else:
-            if args.seeds < 1:
-                raise InvalidParameterError(f"--seeds must be >= 1, got {args.seeds}")
-            check_request(args.experiment, args.n, 0)
             table = robustness(
                 args.experiment,
                 range(args.seeds),
@@ -87,9 +120,12 @@ def main(argv=None) -> int:
             )
             print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
             print("\n" + robustness_summary(table))
-            os.makedirs(args.out, exist_ok=True)
             path = os.path.join(args.out, f"experiment{args.experiment}_robustness.csv")
-            table.to_csv(path, index=False)
+            try:
+                os.makedirs(args.out, exist_ok=True)
+                table.to_csv(path, index=False)
+            except OSError as exc:
+                raise SaveError(f"cannot write {path}: {exc.strerror or exc}") from exc
             print(f"\nwritten: {path}")
     except TutorError as exc:
         print(f"error ({type(exc).__name__}): {exc}", file=sys.stderr)

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import json
+import tempfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from .. import paper
+from ..errors import SaveError
 from . import replication, stats
 from .cohort import CohortResult, run_experiment
 
 __all__ = [
+    "check_out_dir",
     "analyse",
     "format_report",
     "replication_table",
@@ -20,6 +23,45 @@ __all__ = [
     "robustness",
     "robustness_summary",
 ]
+
+
+def check_out_dir(out) -> Path:
+    """Check that the folder ``out`` can be made (if missing) and written, before any work.
+
+    Nothing is created: the nearest existing folder on the way to ``out`` must be a
+    folder, and a scratch file made in it and deleted at once shows it is writable.
+
+    Returns
+    -------
+    Path
+        ``out`` as a path.
+
+    Raises
+    ------
+    SaveError
+        ``out`` (or a folder on the way to it) is a file, or the folder is read-only or
+        otherwise cannot be written.
+    """
+    out = Path(out)
+    nearest = out
+    while not nearest.exists() and nearest != nearest.parent:
+        if nearest.is_symlink():  # a dangling link cannot become a folder
+            break
+        nearest = nearest.parent
+    if not nearest.is_dir():
+        what = (
+            "exists and is not a folder" if nearest == out else f"goes through the file {nearest}"
+        )
+        raise SaveError(f"the output folder {out} {what}; give --out a folder (new or existing)")
+    try:
+        with tempfile.TemporaryFile(dir=nearest):
+            pass
+    except OSError as exc:
+        raise SaveError(
+            f"cannot write in {nearest} ({exc.strerror or exc}), so the results for {out} "
+            "could not be saved; give --out a folder you can write to"
+        ) from exc
+    return out
 
 
 def analyse(result: CohortResult) -> dict:
@@ -85,7 +127,8 @@ def format_report(result: CohortResult, analysis: dict) -> str:
             + "; the paper rounds to 'about 180 %'"
         )
         good = int((result.runs.query("condition == 'NF'").reached_target).sum())
-        lines.append(f"NF teachers reaching 90 %: {good} of {n} (paper: 7 of 30 did well)")
+        well, of = paper.EXPERIMENT_1["did_well_without_feedback"], paper.EXPERIMENT_1["n"]
+        lines.append(f"NF teachers reaching 90 %: {good} of {n} (paper: {well} of {of} did well)")
     else:
         a, pa = st["anova"], paper.EXPERIMENT_2["mixed_anova"]
         for key in ("condition", "run", "interaction"):
@@ -148,9 +191,17 @@ def save_result(result: CohortResult, analysis: dict, out, figures: bool = True)
     """Write ``runs.csv``, ``demos.csv``, ``summary.json``, ``report.txt`` and the figure.
 
     Returns a dict of the paths written.
+
+    Raises
+    ------
+    SaveError
+        ``out`` cannot be made or written (see :func:`check_out_dir`).
     """
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = check_out_dir(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SaveError(f"cannot make the output folder {out}: {exc.strerror or exc}") from exc
     stem = f"experiment{result.experiment}"
     paths = {
         "runs": out / f"{stem}_runs.csv",

@@ -1,0 +1,129 @@
+"""EM for the TP-GMM on sufficient statistics, accelerated by SQUAREM.
+
+The model (:mod:`tutor.tpgmm.model`) hands EM the standardised local data; see the
+package docstring for the features, the covariance prior and why EM never decreases
+the objective.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .linalg import LOG_2PI, sym
+
+__all__ = ["EM", "Infeasible"]
+
+
+class EM:
+    """EM for the TP-GMM on standardised local data U (P, N, D)."""
+
+    def __init__(self, U: np.ndarray, K: int, reg_covar: float):
+        P, N, D = U.shape
+        self.P, self.N, self.D, self.K = P, N, D, K
+        self.iu = np.triu_indices(D)
+        self.n_quad = len(self.iu[0])
+        quad = U[:, :, self.iu[0]] * U[:, :, self.iu[1]]  # (P, N, Dq)
+        feats = np.concatenate([quad, U], axis=2)  # (P, N, Dq + D)
+        self.Phi = np.concatenate(
+            [feats.transpose(1, 0, 2).reshape(N, -1), np.ones((N, 1))], axis=1
+        )  # (N, F)
+        self.PhiT = np.ascontiguousarray(self.Phi.T)  # (F, N): E-step reductions run along N
+        self.psi = reg_covar * N / K
+        self.quad_factor = np.where(self.iu[0] == self.iu[1], -0.5, -1.0)
+
+    def m_step(self, resp: np.ndarray):
+        """Parameters from responsibilities ``resp`` (K, N)."""
+        return self.params(resp @ self.Phi)
+
+    def params(self, S: np.ndarray):
+        """Weights (K,), means (P, K, D), covariances (P, K, D, D) from statistics S (K, F).
+
+        Raises ``Infeasible`` when extrapolated statistics give no valid mixture.
+        """
+        P, D, K = self.P, self.D, self.K
+        Nk = S[:, -1]
+        if np.any(Nk < 0) or not np.all(np.isfinite(S)):
+            raise Infeasible
+        feats = S[:, :-1].reshape(K, P, self.n_quad + D)
+        Nk_safe = np.maximum(Nk, 1e-10 * self.N)
+        mean = feats[..., self.n_quad :] / Nk_safe[:, None, None]  # (K, P, D)
+        second = np.empty((K, P, D, D))
+        second[..., self.iu[0], self.iu[1]] = feats[..., : self.n_quad]
+        second[..., self.iu[1], self.iu[0]] = feats[..., : self.n_quad]
+        scatter = second - Nk[:, None, None, None] * mean[..., :, None] * mean[..., None, :]
+        cov = (scatter + self.psi * np.eye(D)) / Nk_safe[:, None, None, None]
+        return Nk / self.N, mean.transpose(1, 0, 2), sym(cov).transpose(1, 0, 2, 3)
+
+    def e_step(self, params):
+        """Objective at ``params`` and the sufficient statistics of the next M-step."""
+        weights, mean, cov = params
+        try:
+            chol = np.linalg.cholesky(cov)
+        except np.linalg.LinAlgError:
+            raise Infeasible from None
+        prec = sym(np.linalg.inv(cov))  # (P, K, D, D)
+        logdet = 2.0 * np.log(np.diagonal(chol, axis1=-2, axis2=-1)).sum(-1)  # (P, K)
+        lin = np.einsum("pkij,pkj->pki", prec, mean)
+        quad = prec[..., self.iu[0], self.iu[1]] * self.quad_factor
+        const = -0.5 * (np.einsum("pki,pki->pk", lin, mean) + logdet + self.D * LOG_2PI)
+        W = np.concatenate([quad, lin], axis=2).transpose(1, 0, 2).reshape(self.K, -1)
+        const_k = const.sum(0) + np.log(np.maximum(weights, 1e-300))
+        W = np.hstack([W, const_k[:, None]])  # W @ PhiT = log pi_k + sum_j log N_j
+        log_prior = -0.5 * self.psi * np.trace(prec, axis1=-2, axis2=-1).sum()
+
+        resp = W @ self.PhiT  # (K, N) log joint, turned into responsibilities in place
+        top = resp.max(axis=0)
+        np.subtract(resp, top, out=resp)
+        # exp(-100) ~ 4e-44 is already nothing next to the top term (1); clipping keeps
+        # exp and the next product away from subnormal numbers, which are 10x slower
+        np.maximum(resp, -100.0, out=resp)
+        np.exp(resp, out=resp)
+        total = resp.sum(axis=0)
+        objective = (np.log(total).sum() + top.sum() + log_prior) / self.N
+        np.divide(resp, total, out=resp)
+        return float(objective), resp @ self.Phi
+
+    def run(self, params, tol: float, max_iter: int):
+        """EM accelerated by SQUAREM (Varadhan & Roland 2008) on the sufficient statistics.
+
+        Each cycle takes two EM steps S0 -> S1 -> S2, extrapolates along them and
+        keeps the extrapolated point only if its objective beats the plain EM
+        step, so the objective never decreases. Stops when one plain EM step
+        gains less than ``tol``; ``n_iter`` counts E-steps.
+        """
+        obj0, S1 = self.e_step(params)
+        S0 = None
+        n_iter, converged = 1, False
+        best = (params, obj0)
+        while n_iter < max_iter:
+            params1 = self.params(S1)
+            obj1, S2 = self.e_step(params1)
+            n_iter += 1
+            best = (params1, obj1)
+            if obj1 - obj0 < tol:
+                converged = True
+                break
+            if S0 is None or n_iter >= max_iter:
+                S0, obj0, S1 = S1, obj1, S2
+                continue
+            r = S1 - S0
+            v = S2 - 2.0 * S1 + S0
+            alpha = -np.sqrt((r * r).sum() / max((v * v).sum(), 1e-300))
+            if alpha < -1.0:
+                try:
+                    params_x = self.params(S0 - 2.0 * alpha * r + alpha * alpha * v)
+                    obj_x, S_x = self.e_step(params_x)
+                    n_iter += 1
+                    if obj_x >= obj1:
+                        best = (params_x, obj_x)
+                        S0, obj0, S1 = None, obj_x, S_x
+                        continue
+                except Infeasible:
+                    pass
+            S0, obj0, S1 = S1, obj1, S2
+        (weights, mean, cov), objective = best
+        return weights, mean, cov, objective, n_iter, converged
+
+
+class Infeasible(Exception):
+    """Extrapolated statistics that describe no valid mixture."""
