@@ -57,7 +57,5 @@ def test_rule_zero_when_all_green(task):
     s = TeachingSession(task)
     for demo in [(0.03, 0.03), (0.17, 0.03), (0.10, 0.03), (0.06, 0.052)]:
         s.add_demo(task.layout.reference_path(demo))
-    if s.latest.efficacy == 1.0:
-        assert advise(task, s).rule == 0
-    else:
-        assert advise(task, s).rule in (2, 3)
+    assert s.latest.efficacy == 1.0  # these four starts cover the whole start zone
+    assert advise(task, s).rule == 0
