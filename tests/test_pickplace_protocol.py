@@ -45,7 +45,11 @@ def test_selected_tests_cost_time_and_others_wait(task):
         nf.test([3])
     nf.finish()
     nf.test([3])  # after the run, free
-    assert nf.elapsed == pytest.approx(nf.session.meta["demo_seconds"][0])
+    assert nf.elapsed == pytest.approx(nf.attempt.demos[0].seconds)
+    assert [(t.after_demo, t.plants, t.after_run) for t in nf.attempt.tests] == [(1, (3,), True)]
+    assert [(t.after_demo, t.plants, t.after_run) for t in sf.attempt.tests] == [
+        (1, (5, 50), False)
+    ]
 
 
 def test_the_fifteen_minute_cap(task):
