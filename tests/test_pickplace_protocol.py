@@ -63,6 +63,15 @@ def test_the_fifteen_minute_cap(task):
     with pytest.raises(RunOverError, match="15 minutes"):
         run.demonstrate(3, rng=rng)
     assert "15:00" in run.clock_text()
+    # the demo that ran past the cap may still be taken back; no time comes back
+    used = run.elapsed
+    run.undo()
+    assert run.n_demos == n - 1 and run.finished and run.elapsed == pytest.approx(used)
+    run.finish()
+    assert run.attempt.stopped == "time"
+    with pytest.raises(RunOverError):
+        run.undo()  # once finished, nothing changes
+    assert run.n_demos == n - 1
 
 
 def test_bad_plants_and_conditions(task):

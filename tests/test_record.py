@@ -249,7 +249,8 @@ def _pickplace_step(run, step) -> list[str]:
         return _try(run, refused, lambda: run.test(plants), ["test"])
     if kind == "undo":
         refused = InvalidParameterError if run.n_demos == 0 else None
-        refused = refused or (RunOverError if run.finished else None)
+        # a clock that ran out does not stop an Undo (no time comes back); Finish does
+        refused = refused or (RunOverError if run.attempt.finished else None)
         return _try(run, refused, run.undo, ["undo"])
     if kind == "finish":
         return _try(run, None, run.finish, [] if run.attempt.finished else ["finish"])

@@ -185,8 +185,8 @@ class TeachingRun:
         index = len(self._record.attempts) - (0 if begins else 1)
         return Event(kind, self.clock(), index, n, detail)
 
-    def _check_open(self) -> None:
-        if self.finished:
+    def _check_open(self, finished: bool | None = None) -> None:
+        if self.finished if finished is None else finished:
             raise RunOverError(
                 "this run is finished, so it cannot change any more: start the next run, or "
                 "press Reset to begin a new attempt (this one is kept)"
@@ -262,8 +262,10 @@ class TeachingRun:
         """Take back the latest demo (kept in ``Attempt.undone``); returns the new latest.
 
         ``spent_seconds`` is clock time the demo used that stays spent (Experiment 2).
+        Refused once the trainee finished the run; a clock that ran out (Experiment 2)
+        does not stop it, since taking a demo back gives no time back.
         """
-        self._check_open()
+        TeachingRun._check_open(self, self._record.finished)
         if not self.attempt.demos:
             raise InvalidParameterError("there is no demonstration to undo")
         latest = self.session.undo()
