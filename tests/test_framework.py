@@ -1,4 +1,5 @@
-"""Tests of the task-agnostic framework: metrics, failure rules, the session and its files."""
+"""Tests of the task-agnostic framework: metrics, failure rules, the session, the run record
+and its files."""
 
 from __future__ import annotations
 
@@ -7,13 +8,15 @@ import json
 import numpy as np
 import pytest
 
-from tutor.errors import InvalidDemoError, InvalidFileError, InvalidParameterError
+from tutor.errors import InvalidDemoError, InvalidFileError, InvalidParameterError, WrongRunError
 from tutor.framework import (
     AMBIGUOUS,
     INCORRECT,
     UNDEMONSTRATED,
+    RunRecord,
     TeachingSession,
     Thresholds,
+    Trainee,
     efficacy,
     efficiency,
     session_score,
@@ -21,6 +24,7 @@ from tutor.framework import (
 )
 from tutor.framework.failures import demo_warnings, is_ambiguous, undemonstrated_warning
 from tutor.tasks.maze import MazeTask
+from tutor.tasks.maze_run import MazeRun
 
 # --- metrics
 
@@ -198,16 +202,22 @@ def test_session_record_fields_and_undemonstrated_set(task):
     assert s.realisations.shape == (140, 200, 2)
 
 
-def test_rejected_demo_leaves_session_unchanged(task):
+def test_rejected_demo_leaves_session_and_run_unchanged(task):
     s = TeachingSession(task)
     s.add_demo(demo_from(task, (0.03, 0.03)))
-    before = s.to_dict()
+    run = MazeRun.new("VF", task, trainee=Trainee.from_name("Ada"))
+    run.add_demo(demo_from(task, (0.03, 0.03)))
+    history, demos, record = [r.to_dict() for r in s.history], s.demos, run.record
     bad = demo_from(task, (0.1, 0.03))
     bad[10, 1] = np.nan
     for raw in (bad, bad[:1], bad[:, :2], bad * [1, 100, 100]):
         with pytest.raises(InvalidDemoError):
             s.add_demo(raw)
-    assert s.to_dict() == before and s.n_demos == 1
+        with pytest.raises(InvalidDemoError):
+            run.add_demo(raw)
+    assert [r.to_dict() for r in s.history] == history and s.n_demos == 1
+    assert all(np.array_equal(a, b) for a, b in zip(s.demos, demos, strict=True))
+    assert run.record == record and run.n_demos == 1
 
 
 def test_demo_outside_the_maze_is_accepted_and_flagged_incorrect(task):
@@ -257,79 +267,106 @@ def test_feedback_modes_choose_r(task):
         TeachingSession(task, feedback="batch")
 
 
-def test_json_round_trip_gives_identical_results(task, tmp_path):
-    s = TeachingSession(task, thresholds=Thresholds(delta_upper=0.03))
+# --- the run record on the maze: files
+
+
+def test_run_record_round_trip_gives_identical_results(task, tmp_path):
+    run = MazeRun.new("VF", task, trainee=Trainee.from_name("Zoë"))
     for start in [(0.03, 0.03), (0.17, 0.03), (0.10, 0.03)]:
-        s.add_demo(demo_from(task, start))
-    path = s.save(tmp_path / "session.json")
-    loaded = TeachingSession.load(path, task)
-    assert loaded.to_dict()["records"] == s.to_dict()["records"]
-    assert [r.efficacy for r in loaded.history] == [r.efficacy for r in s.history]
-    np.testing.assert_array_equal(loaded.realisations, s.realisations)
-    assert loaded.thresholds == s.thresholds
+        run.add_demo(demo_from(task, start))
+    path = run.save(tmp_path / "run.json")
+    loaded = MazeRun.load(path, task)
+    assert loaded.record == run.record  # every field, attempt and event
+    assert [r.to_dict() for r in loaded.session.history] == [
+        r.to_dict() for r in run.session.history
+    ]
+    np.testing.assert_array_equal(loaded.session.realisations, run.session.realisations)
+    assert loaded.record.trainee.name == "Zoë" and loaded.condition == "VF"
     assert not list(tmp_path.glob(".*.tmp"))  # the atomic write left no temporary file
 
 
-HEAD = '{"format": "lfd-tutor-session", "version": 1, "task": {"name": "maze"}, '
+@pytest.fixture(scope="module")
+def valid_record(task):
+    """The dict of a VF run with one demo (corrupted by the cases below)."""
+    run = MazeRun.new("VF", task, trainee=Trainee.from_name("Ada"))
+    run.add_demo(demo_from(task, (0.03, 0.03)))
+    return run.to_dict()
+
+
+def _edit(change):
+    """A case: ``change`` applied to a copy of the valid record, written as JSON."""
+
+    def text(record):
+        data = json.loads(json.dumps(record))
+        change(data)
+        return json.dumps(data)
+
+    return text
+
+
+def _set(path, value):
+    def change(data):
+        *keys, last = path
+        for k in keys:
+            data = data[k]
+        data[last] = value
+
+    return _edit(change)
 
 
 @pytest.mark.parametrize(
     "content, words",
     [
-        ("", "empty"),
-        (
-            HEAD + '"demos": [[',
-            "not valid JSON",
-        ),
-        ('{"format": "something-else"}', "not an lfd-tutor session"),
-        ('{"format": "lfd-tutor-session", "version": 99}', "version"),
-        (
-            HEAD.replace("maze", "pickplace") + '"demos": []}',
-            "task",
-        ),
-        (
-            HEAD + '"demos": [[[0, NaN, 1]]]}',
-            "not valid JSON",
-        ),
-        (
-            HEAD + '"demos": [[[0, 1]]]}',
-            "invalid data",
-        ),
-        (
-            HEAD + '"demos": "x"}',
-            "demos",
-        ),
-        (
-            '{"format": "lfd-tutor-session", "version": 1, "task": {"name": "maze"}, '
-            '"demos": [], "feedback": "hypnosis"}',
-            "invalid data",
-        ),
-        ("[" * 100000 + "]" * 100000, "not"),
+        (lambda r: "", "empty"),
+        (lambda r: json.dumps(r)[:-40], "not valid JSON"),
+        (lambda r: '{"format": "something-else"}', "not an lfd-tutor run record"),
+        (_set(("format",), "lfd-tutor-session"), "older lfd-tutor"),
+        (_set(("version",), 99), "version 99 is not supported"),
+        (_set(("task",), "pickplace"), "'pickplace' run of experiment 1"),
+        (_set(("experiment",), 2), "run of experiment 2"),
+        (_set(("condition",), "hypnosis"), "condition 'hypnosis'"),
+        (lambda r: json.dumps(r).replace("0.0,", "NaN,", 1), "NaN is not allowed"),
+        (lambda r: json.dumps(r).replace("0.0,", "1e400,", 1), "too large"),
+        (_set(("attempts", 0, "demos", 0, "samples"), [[0, 1]]), "cannot be replayed"),
+        (_set(("attempts",), "x"), "attempts: must be a list"),
+        (_set(("attempts",), []), "at least one attempt"),
+        (_edit(lambda d: d.pop("trainee")), "has no 'trainee'"),
+        (_set(("events", 0, "kind"), "hypnosis"), r"events\[0\]\.kind"),
+        (lambda r: "[" * 100000 + "]" * 100000, "nested too deeply"),
     ],
 )
-def test_corrupt_session_files_give_clear_errors(task, tmp_path, content, words):
+def test_corrupt_run_files_give_clear_errors(task, tmp_path, valid_record, content, words):
     path = tmp_path / "bad.json"
-    path.write_text(content)
+    path.write_text(content(valid_record))
     with pytest.raises(InvalidFileError, match=words):
-        TeachingSession.load(path, task)
+        MazeRun.load(path, task)
+
+
+def test_a_run_of_another_task_is_a_wrong_run(task, tmp_path, valid_record):
+    path = tmp_path / "other.json"
+    path.write_text(_set(("task",), "pickplace")(valid_record))
+    with pytest.raises(WrongRunError, match="not a 'maze' run"):
+        MazeRun.load(path, task)
 
 
 def test_pickle_file_is_refused(task, tmp_path):
     import pickle
 
     path = tmp_path / "evil.json"
-    path.write_bytes(pickle.dumps({"format": "lfd-tutor-session"}))
-    with pytest.raises(InvalidFileError):
-        TeachingSession.load(path, task)
+    path.write_bytes(pickle.dumps({"format": "lfd-tutor-run"}))
+    with pytest.raises(InvalidFileError, match="UTF-8|not valid JSON"):
+        MazeRun.load(path, task)
 
 
-def test_saving_over_a_session_replaces_it_whole(task, tmp_path):
-    s = TeachingSession(task)
-    s.add_demo(demo_from(task, (0.03, 0.03)))
-    path = s.save(tmp_path / "s.json")
-    s.add_demo(demo_from(task, (0.17, 0.03)))
-    s.save(path)
-    assert len(json.loads(path.read_text())["demos"]) == 2
+def test_saving_over_a_run_replaces_it_whole(task, tmp_path):
+    run = MazeRun.new("VF", task)
+    run.add_demo(demo_from(task, (0.03, 0.03)))
+    path = run.save(tmp_path / "s.json")
+    run.add_demo(demo_from(task, (0.17, 0.03)))
+    run.save(path)
+    saved = json.loads(path.read_text())
+    assert len(saved["attempts"][-1]["demos"]) == 2
+    assert RunRecord.from_dict(saved) == run.record
 
 
 def test_explicit_condition_is_kept_and_round_trips(task, tmp_path):
@@ -342,9 +379,14 @@ def test_explicit_condition_is_kept_and_round_trips(task, tmp_path):
     with pytest.raises(InvalidParameterError, match="condition"):
         s.add_demo(demo, condition=[np.nan, 0.2])
     assert s.n_demos == 1
-    loaded = TeachingSession.load(s.save(tmp_path / "s.json"), task)
-    np.testing.assert_allclose(loaded.conditions[0], [0.031, 0.029])
-    assert loaded.latest.efficacy == s.latest.efficacy
+    run = MazeRun.new("VF", task)
+    run.add_demo(demo, condition=[0.031, 0.029])
+    with pytest.raises(InvalidParameterError, match="condition"):
+        run.add_demo(demo, condition=[np.nan, 0.2])
+    assert run.attempt.demos[0].condition == (0.031, 0.029) and run.n_demos == 1
+    loaded = MazeRun.load(run.save(tmp_path / "s.json"), task)
+    np.testing.assert_allclose(loaded.session.conditions[0], [0.031, 0.029])
+    assert loaded.session.latest.efficacy == s.latest.efficacy == run.session.latest.efficacy
 
 
 def test_a_copied_session_shares_its_task():

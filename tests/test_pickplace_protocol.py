@@ -45,7 +45,11 @@ def test_selected_tests_cost_time_and_others_wait(task):
         nf.test([3])
     nf.finish()
     nf.test([3])  # after the run, free
-    assert nf.elapsed == pytest.approx(nf.session.meta["demo_seconds"][0])
+    assert nf.elapsed == pytest.approx(nf.attempt.demos[0].seconds)
+    assert [(t.after_demo, t.plants, t.after_run) for t in nf.attempt.tests] == [(1, (3,), True)]
+    assert [(t.after_demo, t.plants, t.after_run) for t in sf.attempt.tests] == [
+        (1, (5, 50), False)
+    ]
 
 
 def test_the_fifteen_minute_cap(task):
@@ -59,6 +63,15 @@ def test_the_fifteen_minute_cap(task):
     with pytest.raises(RunOverError, match="15 minutes"):
         run.demonstrate(3, rng=rng)
     assert "15:00" in run.clock_text()
+    # the demo that ran past the cap may still be taken back; no time comes back
+    used = run.elapsed
+    run.undo()
+    assert run.n_demos == n - 1 and run.finished and run.elapsed == pytest.approx(used)
+    run.finish()
+    assert run.attempt.stopped == "time"
+    with pytest.raises(RunOverError):
+        run.undo()  # once finished, nothing changes
+    assert run.n_demos == n - 1
 
 
 def test_bad_plants_and_conditions(task):

@@ -181,18 +181,20 @@ def test_plan_weighing_places_spreads_demos_out():
 
 def test_nf_maze_teacher_stops_at_its_prior(maze):
     for enough in (2, 5):
-        s = MazeTeacher(traits(enough_maze=enough), maze).teach("NF", np.random.default_rng(1))
-        assert s.n_demos == enough
-        assert s.meta["why_stopped"] == "satisfied"
-        assert set(s.meta["targets"]) == {"plan"}
-        assert all(len(r.shown) == 0 for r in s.history)  # r is empty
+        run = MazeTeacher(traits(enough_maze=enough), maze).teach("NF", np.random.default_rng(1))
+        assert run.n_demos == enough and run.attempt.n_demos == enough and run.finished
+        assert run.attempt.stopped == "satisfied"
+        assert {d.chosen_by for d in run.attempt.demos} == {"plan"}
+        assert all(len(r.shown) == 0 for r in run.session.history)  # r is empty
 
 
 def test_vf_maze_teacher_aims_at_red(maze):
     teacher = MazeTeacher(traits(enough_maze=2, aim_sd=0.01), maze)
-    s = teacher.teach("VF", np.random.default_rng(3))
-    assert s.meta["targets"][0] == "plan" and "red" in s.meta["targets"]
-    for k, why in enumerate(s.meta["targets"]):
+    run = teacher.teach("VF", np.random.default_rng(3))
+    s = run.session
+    targets = [d.chosen_by for d in run.attempt.demos]
+    assert targets[0] == "plan" and "red" in targets
+    for k, why in enumerate(targets):
         if why != "red":
             continue
         before = s.history[k - 1]
@@ -200,14 +202,17 @@ def test_vf_maze_teacher_aims_at_red(maze):
         gap = np.linalg.norm(maze.conditions[~before.passed] - start, axis=1).min()
         assert gap <= 0.02, f"demo {k + 1} started {gap:.3f} m from the nearest red start"
     # it stops on what it sees, not on its prior of 2 demos
-    assert s.latest.efficacy >= 0.9 or s.meta["why_stopped"] == "patience"
+    assert s.latest.efficacy >= 0.9 or run.attempt.stopped == "patience"
 
 
 def test_vr_maze_teacher_follows_the_rules(maze):
-    s = MazeTeacher(traits(), maze).teach("VR", np.random.default_rng(5))
-    assert s.meta["followed_rules"] and all(s.meta["followed_rules"])
+    run = MazeTeacher(traits(), maze).teach("VR", np.random.default_rng(5))
+    assert run.compliance and all(run.compliance)
+    assert len(run.compliance) == run.n_demos  # every demo's compliance is in the record
+    assert all(d.chosen_by.startswith("rule ") for d in run.attempt.demos)
+    s = run.session
     # replay the rules: demo 2 starts within 4 cm of demo 1 (rule 2)
-    assert s.meta["targets"][:2] == ["rule 1", "rule 2"]
+    assert [d.chosen_by for d in run.attempt.demos[:2]] == ["rule 1", "rule 2"]
     first = maze.condition_of(s.demos[0])
     advice = advise_from(maze, s.history[0].passed, first)
     assert advice.rule == 2  # one demo cannot surround its start with green
@@ -218,14 +223,16 @@ def test_maze_teacher_same_traits_in_every_condition(maze):
     person = traits(enough_maze=3, patience=6, motor_noise=0.002)
     teacher = MazeTeacher(person, maze)
     runs = {c: teacher.teach(c, np.random.default_rng(11)) for c in ("NF", "VF", "VR")}
-    assert all(s.meta["condition"] == c for c, s in runs.items())
+    assert all(run.condition == c for c, run in runs.items())
     assert teacher.traits == person  # teaching changes no trait
     # the same person's traits act in every condition: NF stops at their prior,
     # every run within their patience, every first demo from the same plan
     assert runs["NF"].n_demos == person.enough_maze
-    assert all(s.n_demos <= person.patience for s in runs.values())
+    assert all(run.n_demos <= person.patience for run in runs.values())
+    firsts = {c: run.attempt.demos[0].samples for c, run in runs.items()}
+    assert firsts["NF"] == firsts["VF"] == firsts["VR"]
     again = MazeTeacher(person, maze).teach("VF", np.random.default_rng(11))
-    np.testing.assert_array_equal(again.demos[0], runs["VF"].demos[0])
+    assert again.attempt.demos[0].samples == firsts["VF"]
     with pytest.raises(InvalidParameterError, match="NF, VF, VR"):
         teacher.teach("BF", np.random.default_rng(0))
 
@@ -264,10 +271,13 @@ def test_maze_slip_makes_an_incorrect_demo(maze):
 def test_rf_teacher_catches_a_wrong_plant_slip_after_the_replay(pickplace):
     clumsy = traits(slip_rate=1.0, notice_rate=1.0, patience=1, setup_seconds=0.0)
     rf = PickPlaceTeacher(clumsy, pickplace).teach("RF", np.random.default_rng(4))
-    assert rf.session.meta["retries"] == MAX_RETRIES  # noticed every slip it was shown
+    assert len(rf.attempt.undone) == MAX_RETRIES  # noticed every slip it was shown
+    assert all(d.mistake == "wrong_plant" for d in rf.attempt.undone)
+    assert [e.kind for e in rf.record.events].count("undo") == MAX_RETRIES
     nf = PickPlaceTeacher(clumsy, pickplace).teach("NF", np.random.default_rng(4))
-    assert nf.session.meta["retries"] == 0  # nothing shown, nothing noticed
+    assert nf.attempt.undone == ()  # nothing shown, nothing noticed
     assert not nf.session.history[-1].demo_passed  # the wrong-plant demo stays
+    assert nf.attempt.demos[-1].mistake == "wrong_plant"
 
 
 def test_rf_teacher_keeps_correct_demos(pickplace):
@@ -283,12 +293,14 @@ def test_bf_teacher_pays_125_s_per_demo_under_the_cap(pickplace):
     s = run.session
     assert all(len(r.shown) == 5 for r in s.history)
     robot = 125.0 * s.n_demos
-    assert run.elapsed >= robot + sum(s.meta["demo_seconds"]) + 30.0 * s.n_demos - 1e-6
+    demo_seconds = [d.seconds for d in run.attempt.demos]
+    assert all(x is not None and x > 0 for x in demo_seconds)
+    assert run.elapsed >= robot + sum(demo_seconds) + 30.0 * s.n_demos - 1e-6
     # a slow set-up runs out of the 15 minutes: 300 s + ~10 s demo + 125 s each, so no
     # more than 3 demos start before the cap
     slow = PickPlaceTeacher(dataclasses.replace(t, setup_seconds=300.0), pickplace)
     late = slow.teach("BF", np.random.default_rng(6))
-    assert late.session.meta["why_stopped"] == "time"
+    assert late.attempt.stopped == "time"
     assert late.elapsed >= late.cap
     assert 1 <= late.session.n_demos <= 3
 
@@ -296,7 +308,8 @@ def test_bf_teacher_pays_125_s_per_demo_under_the_cap(pickplace):
 def test_sf_teacher_picks_tests_near_its_demos(pickplace):
     t = traits(test_rate=1.0, patience=4, enough_pickplace=4)
     run = PickPlaceTeacher(t, pickplace).teach("SF", np.random.default_rng(9))
-    tests = [p for test in run.session.meta["tests"] for p in test["plants"]]
+    assert all(not test.after_run for test in run.attempt.tests)  # SF tests during the run
+    tests = [p for test in run.attempt.tests for p in test.plants]
     assert tests, "an SF teacher with test_rate 1 asks for tests"
     demos = {pickplace.nearest_condition(c) for c in run.session.conditions}
     cols = pickplace.scene.cols
@@ -312,12 +325,13 @@ def test_teacher_remembers_failures_between_runs(pickplace):
     run1 = teacher.teach("BF", np.random.default_rng(12))
     seen_failing = [int(i) for r in run1.session.history for i in r.shown[~r.passed[r.shown]]]
     assert teacher.lessons and set(seen_failing) <= set(teacher.lessons)
+    lessons = list(teacher.lessons)
     run2 = teacher.teach("BF", np.random.default_rng(13))
     first = pickplace.nearest_condition(run2.session.conditions[0])
-    assert first == run1.session.meta["lessons"][0]
+    assert first == lessons[0]
     nf = PickPlaceTeacher(traits(patience=2, enough_pickplace=2), pickplace)
     run = nf.teach("NF", np.random.default_rng(14))
-    assert [t["after_run"] for t in run.session.meta["tests"]] == [True]  # tests after the run
+    assert [t.after_run for t in run.attempt.tests] == [True]  # tests after the run
 
 
 def test_protocol_spend_and_undo_keep_the_time(pickplace):
@@ -325,9 +339,10 @@ def test_protocol_spend_and_undo_keep_the_time(pickplace):
     run.spend(40.0)
     run.demonstrate(44, rng=np.random.default_rng(0))
     used = run.elapsed
-    assert used == pytest.approx(40.0 + run.session.meta["demo_seconds"][0] + 25.0)
+    assert used == pytest.approx(40.0 + run.attempt.demos[0].seconds + 25.0)
     assert run.undo() is None and run.session.n_demos == 0
     assert run.elapsed == pytest.approx(used)  # taking a demo back does not give time back
+    assert len(run.attempt.undone) == 1 and run.attempt.other_seconds == pytest.approx(used)
     with pytest.raises(InvalidParameterError):
         run.spend(-1)
 

@@ -296,7 +296,8 @@ class Event:
     """One thing that happened, stamped with the wall clock.
 
     ``n_demos`` is the number of demos in the attempt after the event; ``attempt`` the
-    attempt it happened in (0-based); ``detail`` a short note (a file's name, a number).
+    attempt it happened in (0-based; a reset, a Load that replaces the run and a restore
+    name the attempt they begin); ``detail`` a short note (a file's name, a number).
     """
 
     kind: str

@@ -177,16 +177,24 @@ class TeachingRun:
                 raise InvalidFileError(f"demo {i} of the run cannot be replayed: {exc}") from exc
         return session
 
-    def _event(self, kind: str, n_demos: int | None = None, detail: str = "") -> Event:
+    def _event(
+        self, kind: str, n_demos: int | None = None, detail: str = "", begins: bool = False
+    ) -> Event:
+        """An event in the current attempt, or (``begins``) in the attempt it begins."""
         n = self.attempt.n_demos if n_demos is None else n_demos
-        return Event(kind, self.clock(), len(self._record.attempts) - 1, n, detail)
+        index = len(self._record.attempts) - (0 if begins else 1)
+        return Event(kind, self.clock(), index, n, detail)
 
     def _check_open(self) -> None:
         if self.finished:
-            raise RunOverError(
-                "this run is finished, so it cannot change any more: start the next run, or "
-                "press Reset to begin a new attempt (this one is kept)"
-            )
+            self._refuse_finished()
+
+    @staticmethod
+    def _refuse_finished():
+        raise RunOverError(
+            "this run is finished, so it cannot change any more: start the next run, or "
+            "press Reset to begin a new attempt (this one is kept)"
+        )
 
     # ------------------------------------------------------------ teaching
 
@@ -259,8 +267,11 @@ class TeachingRun:
         """Take back the latest demo (kept in ``Attempt.undone``); returns the new latest.
 
         ``spent_seconds`` is clock time the demo used that stays spent (Experiment 2).
+        Refused once the trainee finished the run; a clock that ran out (Experiment 2)
+        does not stop it, since taking a demo back gives no time back.
         """
-        self._check_open()
+        if self._record.finished:
+            self._refuse_finished()
         if not self.attempt.demos:
             raise InvalidParameterError("there is no demonstration to undo")
         latest = self.session.undo()
@@ -314,7 +325,7 @@ class TeachingRun:
     def reset(self) -> None:
         """Start a new, empty attempt; the current one is kept in the record."""
         self._record = self._record.with_new_attempt(
-            Attempt(started=self.clock()), "reset", self._event("reset", 0)
+            Attempt(started=self.clock()), "reset", self._event("reset", 0, begins=True)
         )
         self.session = self.new_session()
 
@@ -333,15 +344,15 @@ class TeachingRun:
             )
         if self.finished:
             raise WrongRunError(
-                f"this {mine.label} is finished, so nothing can be loaded into it. Nothing "
-                "was loaded and its file is untouched; press Reset first to start a new "
-                "attempt (this one is kept)."
+                f"this {mine.label} is finished, so {other.trainee.name}'s {other.label} "
+                "cannot be loaded into it. Nothing was loaded and its file is untouched; "
+                "press Reset first to start a new attempt (this one is kept)."
             )
         session = self._replay(other.current.demos)
         attempt = replace(other.current, started=self.clock(), ended="", finished=False)
         attempt = replace(attempt, stopped="")
         self._record = mine.with_new_attempt(
-            attempt, "load", self._event("load", attempt.n_demos, detail)
+            attempt, "load", self._event("load", attempt.n_demos, detail, begins=True)
         )
         self.session = session
 
@@ -359,7 +370,9 @@ class TeachingRun:
         session = self._replay(old.demos)
         attempt = replace(old, started=self.clock(), ended="")
         self._record = self._record.with_new_attempt(
-            attempt, "restore", self._event("restore", attempt.n_demos, str(index + 1))
+            attempt,
+            "restore",
+            self._event("restore", attempt.n_demos, str(index + 1), begins=True),
         )
         self.session = session
 
