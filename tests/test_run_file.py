@@ -119,24 +119,47 @@ def test_a_killed_kernels_lock_is_taken_over(tmp_path):
     assert not app.read_only and app.session.n_demos == 2
 
 
-def test_two_tutors_in_one_kernel(tmp_path, good):
+def test_a_cell_run_again_takes_over_the_run_and_the_old_view_is_told(tmp_path, good):
+    """Re-running a tutor's cell makes a second tutor on the same file in the same kernel:
+    the newer one carries on with every demo; the older one says so and is read-only."""
     path = tmp_path / "VF.json"
     one = MazeTutor("VF", session_file=path)
     one.add(good[0])
     two = MazeTutor("VF", session_file=path)
-    assert two.read_only and "open in another tutor" in two.message
-    two.add(good[1])
-    two.undo()
-    two.reset()
-    two.reset()
-    two.finish()
-    assert two.session.n_demos == 1 and two.pad.enabled is False
-    assert len(_record(path)["attempts"]) == 1
+    assert not two.read_only and two.session.n_demos == 1
+    assert one.read_only and "replaced by a newer one" in one.message
+    assert "replaced by a newer one" in one.panel.value  # the old view was redrawn
     one.add(good[1])
+    one.undo()
+    one.request_reset()
+    one.request_reset()
+    one.finish()
+    assert one.session.n_demos == 1 and one.pad.enabled is False
+    assert len(_record(path)["attempts"][-1]["demos"]) == 1  # the old view changed nothing
+    two.add(good[1])
     assert len(_record(path)["attempts"][-1]["demos"]) == 2
-    one.close()
-    three = MazeTutor("VF", session_file=path)
-    assert not three.read_only and three.session.n_demos == 2
+    # a tutor for another run on the same file name takes nothing from the first
+    other = MazeTutor("VR", session_file=path)
+    assert not two.read_only and other.session_file.name == "VF-2.json"
+
+
+def test_a_read_only_view_can_try_again_once_the_other_kernel_has_gone(tmp_path, good):
+    path = tmp_path / "VF.json"
+    first = _child(path, 2)
+    try:
+        _read_until_ready(first)
+        view = MazeTutor("VF", session_file=path, trainee="Mai Anh")
+        assert view.read_only and view.retry.layout.display != "none"
+        view.retry.click()
+        assert view.read_only and "still open in another tutor" in view.message
+    finally:
+        first.stdin.close()
+        first.wait(30)
+    view.retry.click()
+    assert not view.read_only and "saves the run" in view.message
+    assert view.session.n_demos == 2 and view.retry.layout.display == "none"
+    view.add(good[2])
+    assert len(_record(path)["attempts"][-1]["demos"]) == 3
 
 
 # ---------------------------------------------------------------- nothing deleted

@@ -10,11 +10,13 @@ the notebooks); each trainee gets a folder of their own inside it.
 
 Trainee folders. A trainee's folder key is derived from their name *injectively*: the
 name is normalised (Unicode NFC, surrounding spaces removed, inner runs of spaces made
-one), then the key is a readable ASCII part of it followed by a short hash of the whole
-normalised name. So 'Mai Anh' and 'Mai_Anh', two different Devanagari names or two
-emoji get different folders, while 'Zoë' typed as NFC or as NFD gets the same one. Keys
-are lower-case ASCII (safe on case-insensitive file systems) and at most 52 characters.
-On a JupyterHub, ``JUPYTERHUB_USER`` is the default name.
+one, invisible format characters such as direction marks and zero-width spaces
+dropped), then the key is a readable ASCII part of it followed by a short hash of the
+whole normalised name. Direction overrides (which reorder text on screen) are refused.
+So 'Mai Anh' and 'Mai_Anh', two different Devanagari names or two emoji get different
+folders, while 'Zoë' typed as NFC or as NFD gets the same one. Keys are lower-case
+ASCII (safe on case-insensitive file systems) and at most 52 characters. On a
+JupyterHub, ``JUPYTERHUB_USER`` is the default name.
 """
 
 from __future__ import annotations
@@ -36,6 +38,8 @@ __all__ = [
     "default_trainee",
 ]
 
+#: embedding and override controls: they reorder text on screen, so they are refused
+_DIRECTION_CONTROLS = set("\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
 #: the readable part of a folder key is at most this long
 _READABLE = 40
 _HASH_CHARS = 10
@@ -52,7 +56,16 @@ def normalise_name(name) -> str:
         raise InvalidParameterError(
             f"the trainee's name must be text, e.g. trainee = \"Mai Anh\"; got {name!r}"
         )
-    text = " ".join(unicodedata.normalize("NFC", name).split())
+    if any(c in _DIRECTION_CONTROLS for c in name):
+        raise InvalidParameterError(
+            "the trainee's name holds invisible direction controls (U+202A-U+202E, "
+            "U+2066-U+2069) that would reorder it on screen: remove them and type the name "
+            "again"
+        )
+    # invisible format characters (direction marks, zero-width spaces) are dropped, so a
+    # name copied from a chat or a right-to-left document finds the same folder
+    visible = "".join(c for c in name if unicodedata.category(c) != "Cf")
+    text = " ".join(unicodedata.normalize("NFC", visible).split())
     if not text or any(unicodedata.category(c) == "Cc" for c in text):
         raise InvalidParameterError(
             "the trainee's name is empty or holds control characters: type a name, e.g. "

@@ -62,7 +62,9 @@ def voila_scene(workdir):
         cwd=root,
     )
     try:
-        wait_http(f"http://127.0.0.1:{port}/", proc, timeout=120)
+        # a static file, not the page: a GET of the page would start a kernel that runs
+        # the notebook and holds its runs' files until Voila culls it
+        wait_http(f"http://127.0.0.1:{port}/voila/static/voila.js", proc, timeout=120)
         yield f"http://127.0.0.1:{port}/"
     finally:
         stop(proc)

@@ -30,10 +30,11 @@ not stored: it is recomputed by replaying the demos (:mod:`tutor.framework.run`)
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 
-from ..errors import InvalidFileError
+from ..errors import InvalidFileError, InvalidParameterError
 from ..runtime import default_trainee, normalise_name, trainee_key
 
 __all__ = [
@@ -52,6 +53,8 @@ __all__ = [
 ]
 
 RECORD_FORMAT = "lfd-tutor-run"
+#: a trainee's folder key (see :func:`tutor.runtime.trainee_key`)
+_KEY = re.compile(r"[a-z0-9][a-z0-9-]{0,63}")
 RECORD_VERSION = 1
 SUPPORTED_VERSIONS = (1,)
 
@@ -193,7 +196,16 @@ class Trainee:
     @classmethod
     def from_dict(cls, data, path: str = "trainee") -> Trainee:
         d = _obj(data, path, ("name", "key"))
-        return cls(_str(d["name"], f"{path}.name"), _str(d["key"], f"{path}.key"))
+        name, key = _str(d["name"], f"{path}.name"), _str(d["key"], f"{path}.key")
+        try:
+            clean = normalise_name(name)
+        except InvalidParameterError as exc:
+            _fail(f"{path}.name", str(exc))
+        if clean != name:
+            _fail(f"{path}.name", "is not written the way the tutor writes names")
+        if not _KEY.fullmatch(key):
+            _fail(f"{path}.key", "must be lower-case letters, digits and '-' (at most 64)")
+        return cls(name, key)
 
 
 @dataclass(frozen=True)

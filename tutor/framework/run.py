@@ -109,7 +109,7 @@ class TeachingRun:
 
     @classmethod
     def check_condition(cls, condition) -> str:
-        if condition not in cls.conditions:
+        if not isinstance(condition, str) or condition not in cls.conditions:
             raise InvalidParameterError(
                 f"condition must be one of {', '.join(cls.conditions)}, got {condition!r}"
             )
@@ -295,8 +295,14 @@ class TeachingRun:
             raise InvalidParameterError("give a demonstration before testing the robot")
         n = len(self.task.conditions)
         idx = tuple(int(p) for p in plants)
-        if not idx or any(not 0 <= p < n for p in idx):
-            raise InvalidParameterError(f"test conditions are numbers from 0 to {n - 1}")
+        if not idx:
+            raise InvalidParameterError(
+                f"no {self.task.condition_noun} was chosen to test: choose at least one"
+            )
+        if any(not 0 <= p < n for p in idx):
+            raise InvalidParameterError(
+                f"{self.task.condition_noun_plural} are numbers from 0 to {n - 1}"
+            )
         a = self.attempt
         attempt = replace(a, tests=(*a.tests, Test(a.n_demos, idx, bool(after_run))))
         detail = " ".join(map(str, idx))
@@ -305,8 +311,17 @@ class TeachingRun:
 
     def spend(self, seconds: float) -> None:
         """Count clock time besides demos and robot attempts (e.g. setting up a plant)."""
-        if isinstance(seconds, bool) or not (float(seconds) >= 0 and np.isfinite(seconds)):
-            raise InvalidParameterError(f"seconds must be a finite number >= 0, got {seconds!r}")
+        ok = isinstance(seconds, (int, float, np.integer, np.floating)) and not isinstance(
+            seconds, bool
+        )
+        try:
+            ok = ok and bool(float(seconds) >= 0 and np.isfinite(float(seconds)))
+        except OverflowError:
+            ok = False
+        if not ok:
+            raise InvalidParameterError(
+                f"seconds must be a finite number >= 0, e.g. spend(30); got {seconds!r}"
+            )
         a = self.attempt
         attempt = replace(a, other_seconds=a.other_seconds + float(seconds))
         self._record = self._record.with_current(

@@ -274,8 +274,11 @@ class TeachingSession:
         task = self.task
         if condition is None:
             return np.asarray(task.condition_of(demo), dtype=float)
-        cond = np.asarray(condition, dtype=float)
         expected = np.asarray(task.conditions).shape[1:]
+        try:
+            cond = np.asarray(condition, dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            cond = np.full(0, np.nan)
         if cond.shape != expected or not np.all(np.isfinite(cond)):
             raise InvalidParameterError(
                 f"condition must be a finite array of shape {expected} like the rows of "

@@ -29,14 +29,17 @@ from __future__ import annotations
 import functools
 import html
 import logging
+import os
 import time
+import weakref
 from pathlib import Path
 
 import ipywidgets as w
+import numpy as np
 
 from ..demofiles import DEMOS_FORMAT, load_demos
-from ..errors import InvalidFileError, SaveError, TutorError
-from ..fileio import read_json
+from ..errors import InvalidFileError, InvalidParameterError, SaveError, TutorError
+from ..fileio import check_file_name, read_json
 from ..framework import RunRecord, TeachingRun, Trainee
 from ..framework.record import RECORD_FORMAT
 from .uploads import on_upload
@@ -47,8 +50,23 @@ log = logging.getLogger(__name__)
 
 #: a second click on Reset within this many seconds confirms it
 RESET_CONFIRM_SECONDS = 5.0
+#: seconds a tutor waits for another kernel's lock before it opens read-only
+LOCK_WAIT_SECONDS = 2.0
+#: the tutor of this kernel that holds each run file (by real path)
+_OWNERS: dict[str, weakref.ref] = {}
 #: how many sibling names (NF-2.json ...) are tried when a file holds another run
 _MAX_SIBLINGS = 50
+
+
+def _check_path(path, what: str = "session_file") -> str:
+    """``path`` as text, or InvalidParameterError saying what is wrong with it."""
+    problem = check_file_name(path)
+    if problem is not None:
+        raise InvalidParameterError(
+            f"{what}: {problem}. Give the file's path as text, e.g. "
+            f'{what}=folder / "VF.json", with a shorter name if it is too long'
+        )
+    return os.fspath(path)
 
 
 def guarded(method):
@@ -114,7 +132,7 @@ class TutorApp:
         self.unsaved = False
         self._lock = None
         self._reset_asked = -1e9
-        self.session_file = None if session_file is None else Path(session_file)
+        self.session_file = None if session_file is None else Path(_check_path(session_file))
         self.run = self._open()
 
     # ------------------------------------------------------------ state
@@ -181,25 +199,32 @@ class TutorApp:
         return self._fresh()
 
     def _try_resume(self, path: Path):
-        """(run or None, None) when ``path`` can be this tutor's file; (None, why) if not."""
+        """(run or None, None) when ``path`` can be this tutor's file; (None, why) if not.
+
+        The file is read after its lock is taken, so no other writer can change it
+        between the reading and this tutor's first save.
+        """
         if path.exists() and not path.is_file():
             return None, f"{path.name} is not a regular file, so it is left alone."
+        locked = self._take_lock(path)
+        record = None
         if path.exists():
             try:
                 record = RunRecord.from_dict(read_json(path, "run file"))
             except InvalidFileError as exc:
+                self._release_lock()
                 return None, f"Could not resume from {path.name}: {exc}. It is kept untouched."
             if not self._matches(record):
+                self._release_lock()
                 return None, (
                     f"Could not resume from {path.name}: it holds "
                     f"{record.trainee.name}'s {record.label}, not "
                     f"{self.trainee.name}'s {self._fresh_record_like().label}; it is kept "
                     "untouched."
                 )
-        if not self._take_lock(path):
-            run = self._resume_read_only(path)
-            return run, None
-        if not path.exists():
+        if not locked:
+            return self._read_only_view(path, record), None
+        if record is None:
             return None, None
         try:
             run = self.run_class.from_record(self.task, record)
@@ -207,30 +232,65 @@ class TutorApp:
             self._release_lock()
             return None, f"Could not resume from {path.name}: {exc}. It is kept untouched."
         self.message = (
-            f"Resumed {run.n_demos} demonstration(s) from {path.name}."
+            f"{self.message} Resumed {run.n_demos} demonstration(s) from {path.name}."
             + (" This run is finished." if run.finished else "")
-        )
+        ).strip()
         return run, None
 
-    def _resume_read_only(self, path: Path) -> TeachingRun:
+    def _read_only_view(self, path: Path, record: RunRecord | None) -> TeachingRun:
         self.read_only = True
         self.message = (
-            f"{path.name} is open in another tutor (another notebook, kernel or browser "
-            "tab). To keep that run safe, this view is read-only: nothing you do here is "
-            "saved. Close the other one (or restart its kernel), then run this cell again."
+            f"{path.name} is open in another tutor (another kernel or browser tab). To "
+            "keep that run safe, this view is read-only: nothing you do here is saved. "
+            "Close the other one (or restart its kernel), then press Try again."
         )
+        if record is None:
+            return self._fresh()
         try:
-            return self.run_class.from_record(
-                self.task, RunRecord.from_dict(read_json(path, "run file"))
-            )
-        except (InvalidFileError, FileNotFoundError):
+            return self.run_class.from_record(self.task, record)
+        except InvalidFileError:
             return self._fresh()
 
-    def _take_lock(self, path: Path) -> bool:
-        """Hold ``path``'s lock; False when another tutor or kernel holds it."""
+    @guarded
+    def try_again(self) -> None:
+        """A read-only view tries once more to take its run's file (and reloads it)."""
+        if not self.read_only or self.session_file is None:
+            return
+        path = self.session_file
+        if not self._take_lock(path):
+            self.message = (
+                f"{path.name} is still open in another tutor: close that one (or restart "
+                "its kernel) first. This view stays read-only."
+            )
+            return
+        self.read_only = False
+        if path.exists():
+            self.run = self.run_class.from_record(
+                self.task, RunRecord.from_dict(read_json(path, "run file"))
+            )
+        self.message = f"This tutor saves the run to {path.name} again."
+
+    def _take_lock(self, path: Path, wait: float | None = None) -> bool:
+        """Hold ``path``'s lock; False when another kernel holds it.
+
+        A tutor made earlier in this same kernel on the same file (a cell run again) hands
+        its file over: it saves, becomes read-only and says so. Another kernel's lock is
+        waited for a moment (a reloaded Voila page's old kernel may be shutting down).
+        """
         from filelock import FileLock, Timeout
 
-        lock = FileLock(str(path.with_name(f".{path.name}.lock")), timeout=0)
+        key = os.path.realpath(path)
+        earlier = _OWNERS.get(key)
+        owner = earlier() if earlier is not None else None
+        if (
+            owner is not None
+            and owner is not self
+            and owner._lock is not None
+            and self._matches(owner.record)
+        ):
+            owner._hand_over()
+        wait = LOCK_WAIT_SECONDS if wait is None else wait
+        lock = FileLock(str(path.with_name(f".{path.name}.lock")), timeout=wait)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             lock.acquire()
@@ -240,7 +300,23 @@ class TutorApp:
             log.warning("no lock on %s: %s", path, exc)
             return True
         self._lock = lock
+        _OWNERS[key] = weakref.ref(self)
         return True
+
+    def _hand_over(self) -> None:
+        """A newer tutor in this kernel takes this one's file: save, let go, say so."""
+        self._autosave()
+        self._release_lock()
+        self.read_only = True
+        self.message = (
+            "This tutor was replaced by a newer one on the same run (its cell was run "
+            "again), which carries on with every demonstration. Use that one; this view is "
+            "read-only now."
+        )
+        try:
+            self.refresh()
+        except Exception:  # a view that cannot redraw must not stop the newer tutor
+            log.exception("refreshing a replaced tutor failed")
 
     def _release_lock(self) -> None:
         if self._lock is not None:
@@ -352,6 +428,10 @@ class TutorApp:
         """Bring back earlier attempt number ``attempt`` (1-based) as a new attempt."""
         if self._refuse_if_read_only():
             return
+        if isinstance(attempt, bool) or not isinstance(attempt, (int, np.integer)):
+            raise InvalidParameterError(
+                f"an attempt is a whole number (1 for the first), got {attempt!r}"
+            )
         self.run.restore(int(attempt) - 1)
         self.message = (
             f"Brought back attempt {attempt} as attempt {len(self.record.attempts)} "
@@ -378,6 +458,12 @@ class TutorApp:
         its file are left as they were."""
         if self._refuse_if_read_only():
             return
+        problem = check_file_name(path)
+        if problem is not None:
+            raise InvalidFileError(
+                f"Nothing was loaded: {problem}. Choose a .json or .csv file with the Load "
+                "button, or give its path as text."
+            )
         path = Path(path)
         try:
             self._load(path)
@@ -395,7 +481,7 @@ class TutorApp:
         elif suffix == ".json":
             data = read_json(path, "file")
             kind = data.get("format") if isinstance(data, dict) else None
-            if kind == RECORD_FORMAT:
+            if kind == RECORD_FORMAT or kind == "lfd-tutor-session":
                 other = RunRecord.from_dict(data)
                 self.run.replace_with(other, detail=path.name)
                 self.message = (
@@ -450,6 +536,12 @@ class TutorApp:
             layout=w.Layout(width="100px", display="none"),
         )
         self.bring_back.on_click(lambda _: self._on_bring_back())
+        self.retry = w.Button(
+            description="Try again",
+            tooltip="Take the run's file back once the other tutor is closed",
+            layout=w.Layout(width="100px", display="none"),
+        )
+        self.retry.on_click(lambda _: self.try_again())
         self.status = w.HTML()
 
     def _on_bring_back(self) -> None:
@@ -467,6 +559,7 @@ class TutorApp:
         self.attempts.layout.display = show
         self.bring_back.layout.display = show
         self.upload.disabled = self.read_only or self.finished
+        self.retry.layout.display = "flex" if self.read_only else "none"
         if self.read_only:
             state = "read-only (open in another tutor)"
         elif self.session_file is None:

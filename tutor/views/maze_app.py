@@ -82,7 +82,7 @@ class MazeTutor(TutorApp):
                 w.VBox(
                     [
                         w.HBox([*self.buttons.values(), self.upload]),
-                        w.HBox([self.attempts, self.bring_back]),
+                        w.HBox([self.attempts, self.bring_back, self.retry]),
                         self.panel,
                         self.status,
                     ]

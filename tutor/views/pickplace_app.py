@@ -131,7 +131,7 @@ class PickPlaceTutor(TutorApp):
                         self.buttons["Reset"],
                     ]
                 ),
-                w.HBox([self.attempts, self.bring_back]),
+                w.HBox([self.attempts, self.bring_back, self.retry]),
                 self.clock,
                 self.panel,
                 self.status,
@@ -194,10 +194,16 @@ class PickPlaceTutor(TutorApp):
     def _load_items(self, demos, name: str):
         """Each demo counts for the plant the file says it was meant for (``conditions``),
         or else the plant nearest to where the hand closes; a meant condition farther than
-        half a plant pitch from every plant is refused."""
+        half a plant spacing from every plant's grasp point is refused."""
         items = []
+        width = self.task.conditions.shape[1]
         for i, (raw, meant) in enumerate(zip(demos, demos.conditions, strict=True), start=1):
             try:
+                if meant is not None and np.asarray(meant).shape != (width,):
+                    raise InvalidFileError(
+                        f"its condition has {np.asarray(meant).size} number(s); a plant's "
+                        f"grasp point has {width} (x, y, z in metres), or write null"
+                    )
                 where = (
                     self.task.condition_of(self.task.preprocess(raw)) if meant is None else meant
                 )
@@ -217,20 +223,33 @@ class PickPlaceTutor(TutorApp):
         if total > self.run.remaining:
             raise InvalidFileError(
                 f"the {len(items)} demonstration(s) in {name} take {total:.0f} s, but only "
-                f"{self.run.remaining:.0f} s of this run are left"
+                f"{self.run.remaining:.0f} s of this run are left: load fewer "
+                "demonstrations, or load them into the next run"
             )
         return items
 
     def _plant_at(self, where, meant: bool) -> int:
+        """The plant whose grasp point is ``where`` (a meant condition must lie within
+        half a plant spacing of one, in all three coordinates)."""
+        where = np.asarray(where, dtype=float)
         plant = int(self.task.nearest_condition(where))
         if meant:
-            gap = float(np.linalg.norm(np.asarray(where)[:2] - self.task.conditions[plant][:2]))
+            grasp = self.task.conditions
+            gap = float(np.linalg.norm(where - grasp[plant]))
             pitch = float(self.task.scene.pitch)
             if gap > pitch / 2:
+                hint = ""
+                for unit, scale in (("centimetres", 100.0), ("millimetres", 1000.0)):
+                    if np.linalg.norm(grasp - where / scale, axis=1).min() <= pitch / 2:
+                        hint = (
+                            f" It looks like {unit}: divide the positions and conditions "
+                            f"by {scale:g}."
+                        )
+                        break
                 raise InvalidFileError(
-                    f"its condition {np.round(np.asarray(where, float), 3).tolist()} is "
-                    f"{100 * gap:.1f} cm from the nearest plant; a plant's grasp point is "
-                    "within half a plant spacing (positions in metres)"
+                    f"its condition {np.round(where, 3).tolist()} is {100 * gap:.1f} cm from "
+                    f"the nearest plant's grasp point; a meant plant must be within half a "
+                    f"plant spacing ({100 * pitch / 2:.1f} cm), in metres.{hint}"
                 )
         return plant
 
