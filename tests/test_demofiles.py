@@ -79,10 +79,10 @@ def test_decimal_commas_are_refused_naming_the_separator(tmp_path, sep, shown):
     "body, words",
     [
         ("demo;t;x;w\n1;0;1;2\n", "unknown column 'w'"),
-        ("demo;t;x;y\n1;0;1\n", "3 values but the header has 4"),
+        ("demo;t;x;y\n1;0;1\n", "line 2: 3 values but the header has 4 .* fix that line"),
         ("demo;t;x;y\n1;0;1;abc\n", "'abc' is not a number"),
         ("demo;t;x;y\n1;0;1;nan\n", "NaN or inf"),
-        ("demo;t;x;y\n", "holds no samples"),
+        ("demo;t;x;y\n", "holds no samples.* at least 2 per demonstration"),
         ("t;x;y\n0;1;2\n", "needs one 'demo' column"),
         ("demo;x;y\n1;1;2\n", "no 't' column"),
         ("demo;t;x;x\n1;0;1;2\n", "appears twice"),

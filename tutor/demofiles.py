@@ -405,7 +405,9 @@ def _load_csv(path: Path, expected) -> DemoSet:
                 continue
             if len(row) != len(header):
                 raise InvalidFileError(
-                    f"{where}, line {line_no}: {len(row)} values but the header has {len(header)}"
+                    f"{where}, line {line_no}: {len(row)} values but the header has "
+                    f"{len(header)} ({', '.join(header)}); every line needs one value per "
+                    "column: fix that line"
                 )
             label = row[label_at].strip()
             if not label:
@@ -415,7 +417,10 @@ def _load_csv(path: Path, expected) -> DemoSet:
     except csv.Error as exc:
         raise InvalidFileError(f"{where}, line {reader.line_num}: {exc}") from exc
     if not groups:
-        raise InvalidFileError(f"{where} holds no samples")
+        raise InvalidFileError(
+            f"{where} holds no samples, only the header: add the rows below it, one per "
+            "sample and at least 2 per demonstration"
+        )
     return DemoSet([np.array(g)[:, order] for g in groups.values()], columns)
 
 
