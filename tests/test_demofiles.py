@@ -172,6 +172,22 @@ def test_unsupported_versions_are_refused_listing_the_supported(tmp_path, versio
     assert repr(version) in str(info.value)
 
 
+@pytest.mark.parametrize(
+    "condition, shown",
+    [("plant 3", "'plant 3'"), (3, "3"), ([], r"\[\]"), (True, "true"), ({"x": 1}, "{'x': 1}")],
+)
+def test_a_condition_that_is_not_a_list_of_numbers_is_refused(tmp_path, condition, shown):
+    text = demo_json(demos=[[[0, 1, 2], [1, 2, 3]]] * 2, conditions=[[0.3, 0.1], condition])
+    with pytest.raises(InvalidFileError, match=f"condition 2 is {shown}, not a list of numbers"):
+        load_demos(write(tmp_path, "d.json", text))
+
+
+def test_conditions_given_or_null_are_kept(tmp_path):
+    text = demo_json(demos=[[[0, 1, 2], [1, 2, 3]]] * 2, conditions=[[0.3, 0.1], None])
+    loaded = load_demos(write(tmp_path, "d.json", text))
+    assert loaded.conditions[0].tolist() == [0.3, 0.1] and loaded.conditions[1] is None
+
+
 def test_a_missing_version_is_version_1(tmp_path):
     assert len(load_demos(write(tmp_path, "d.json", demo_json()))) == 1
     assert len(load_demos(write(tmp_path, "e.json", demo_json(version=1)))) == 1
