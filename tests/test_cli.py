@@ -55,7 +55,7 @@ def test_out_through_a_file_is_refused(tmp_path, command):
     blocker.write_text("")
     target = blocker / "sub" / "results"  # ENOTDIR on the way
     proc = _tutor(command, "--experiment", "1", "--no-progress", "--out", str(target), cwd=tmp_path)
-    _refused(proc, "SaveError", f"goes through the file {blocker}")
+    _refused(proc, "SaveError", f"goes through the file {blocker}, which is a file, not a folder")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
 
 
@@ -102,13 +102,28 @@ def test_read_only_out_is_refused(tmp_path):
         (["robustness", "--experiment", "1", "--seeds", "ten"], ["--seeds", "'ten'"]),
         (["reproduce", "--experiment", "3"], ["--experiment", "invalid choice: 3"]),
         (["reproduce", "--experiment", "2", "--n", "7"], ["ParameterError", "multiple of 4"]),
-        (["reproduce", "--experiment", "1", "--n", "1"], ["InvalidParameterError", "at least 2"]),
+        (["reproduce", "--experiment", "1", "--n", "2"], ["InvalidParameterError", "at least 3"]),
+        (["reproduce", "--experiment", "1", "--n", str(10**12)], ["at most 3000 teachers"]),
+        (["robustness", "--experiment", "2", "--n", "3004"], ["at most 3000 teachers"]),
     ],
 )
 def test_bad_number_is_refused_with_a_message(tmp_path, args, words):
     proc = _tutor(*args, "--no-progress", "--out", str(tmp_path / "out"), cwd=tmp_path)
     _refused(proc, *words)
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_the_smallest_allowed_cohort_is_analysed(tmp_path):
+    from tutor.study.cohort import min_teachers
+
+    n = min_teachers(1)
+    proc = _tutor(
+        "reproduce", "--experiment", "1", "--n", str(n), "--workers", "1", "--no-progress",
+        "--no-figures", "--out", str(tmp_path / "out"), cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert f"Experiment 1: {n} simulated teachers" in proc.stdout
 
 
 def test_check_out_dir_accepts_a_new_nested_folder_and_makes_nothing(tmp_path):

@@ -79,10 +79,10 @@ def test_decimal_commas_are_refused_naming_the_separator(tmp_path, sep, shown):
     "body, words",
     [
         ("demo;t;x;w\n1;0;1;2\n", "unknown column 'w'"),
-        ("demo;t;x;y\n1;0;1\n", "3 values but the header has 4"),
+        ("demo;t;x;y\n1;0;1\n", "line 2: 3 values but the header has 4 .* fix that line"),
         ("demo;t;x;y\n1;0;1;abc\n", "'abc' is not a number"),
         ("demo;t;x;y\n1;0;1;nan\n", "NaN or inf"),
-        ("demo;t;x;y\n", "holds no samples"),
+        ("demo;t;x;y\n", "holds no samples.* at least 2 per demonstration"),
         ("t;x;y\n0;1;2\n", "needs one 'demo' column"),
         ("demo;x;y\n1;1;2\n", "no 't' column"),
         ("demo;t;x;x\n1;0;1;2\n", "appears twice"),
@@ -170,6 +170,22 @@ def test_unsupported_versions_are_refused_listing_the_supported(tmp_path, versio
     with pytest.raises(InvalidFileError, match="cannot read; it reads version 1") as info:
         load_demos(write(tmp_path, "d.json", demo_json(version=version)))
     assert repr(version) in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "condition, shown",
+    [("plant 3", "'plant 3'"), (3, "3"), ([], r"\[\]"), (True, "true"), ({"x": 1}, "{'x': 1}")],
+)
+def test_a_condition_that_is_not_a_list_of_numbers_is_refused(tmp_path, condition, shown):
+    text = demo_json(demos=[[[0, 1, 2], [1, 2, 3]]] * 2, conditions=[[0.3, 0.1], condition])
+    with pytest.raises(InvalidFileError, match=f"condition 2 is {shown}, not a list of numbers"):
+        load_demos(write(tmp_path, "d.json", text))
+
+
+def test_conditions_given_or_null_are_kept(tmp_path):
+    text = demo_json(demos=[[[0, 1, 2], [1, 2, 3]]] * 2, conditions=[[0.3, 0.1], None])
+    loaded = load_demos(write(tmp_path, "d.json", text))
+    assert loaded.conditions[0].tolist() == [0.3, 0.1] and loaded.conditions[1] is None
 
 
 def test_a_missing_version_is_version_1(tmp_path):

@@ -121,6 +121,38 @@ def test_numbers_a_float_can_hold_are_kept(tmp_path):
     assert value[0] == 1e308 and value[1] == 0.0 and value[2] == int("9" * 300)
 
 
+@pytest.mark.parametrize(
+    "text, key",
+    [
+        ('{"a": 1, "a": 2}', "a"),
+        ('{"demos": [], "b": {"x": 1, "y": 2, "x": 3}}', "x"),
+        ('[{"ok": 1}, {"t": 0, "t": 0}]', "t"),
+        ('{"' + "k" * 60 + '": 1, "' + "k" * 60 + '": 1}', "k" * 40 + "..."),
+    ],
+)
+def test_a_key_given_twice_in_one_object_is_refused_by_name(tmp_path, text, key):
+    path = tmp_path / "f.json"
+    path.write_text(text)
+    with pytest.raises(InvalidFileError) as info:
+        read_json(path, "session file")
+    message = str(info.value)
+    assert f'the key "{key}" appears twice' in message and "keep one" in message
+
+
+def test_the_same_key_in_different_objects_is_kept(tmp_path):
+    path = tmp_path / "f.json"
+    path.write_text('{"a": {"a": 1}, "b": [{"a": 2}, {"a": 3}]}')
+    assert read_json(path) == {"a": {"a": 1}, "b": [{"a": 2}, {"a": 3}]}
+
+
+def test_a_loop_of_symbolic_links_says_how_to_fix_it(tmp_path):
+    os.symlink("b.json", tmp_path / "a.json")
+    os.symlink("a.json", tmp_path / "b.json")
+    with pytest.raises(InvalidFileError, match="loop of symbolic links") as info:
+        read_json(tmp_path / "a.json", "session file")
+    assert "point it at the real file" in str(info.value)
+
+
 def test_not_utf8_is_refused(tmp_path):
     path = tmp_path / "f.json"
     path.write_bytes(b'{"a": "\xff"}')

@@ -376,7 +376,10 @@ def test_experiment2_reduced_cohort_is_reproducible():
     ("experiment", "n", "seed", "match"),
     [
         (3, None, 0, "experiment must be 1"),
-        (1, 1, 0, "at least 2 teachers"),
+        (1, 1, 0, "at least 3 teachers"),
+        (1, 2, 0, "at least 3 teachers"),
+        (1, 3001, 0, "at most 3000 teachers"),
+        (2, 3004, 0, "at most 3000 teachers"),
         (2, 10, 0, "multiple of 4"),
         (1, None, -1, "seed must be"),
         (1, 2.5, 0, "integer"),

@@ -352,6 +352,7 @@ def simple():
         (lambda d: [list(r) for r in d[:3]] + [[1.0]], InvalidDemoError, "numeric"),
         (lambda d: d + 1j, InvalidDemoError, "complex"),
         (lambda d: d.astype(str), InvalidDemoError, "text"),
+        (lambda d: [[*r[:-1], 10**400] for r in d.tolist()], InvalidDemoError, "too large"),
     ],
 )
 def test_bad_demo_raises_named_error(simple, mutate, error, words):
@@ -447,7 +448,9 @@ BAD_SETTINGS = [
     ("reg_covar", True),
     ("reg_covar", 1e-3 + 0j),
     ("reg_covar", float("nan")),
+    ("reg_covar", 10**400),
     ("tol", "0"),
+    ("tol", -(10**400)),
     ("tol", None),
     ("warm_start", "no"),
     ("warm_start", 1),
@@ -568,6 +571,8 @@ def test_frames_in_millimetres_or_kilometres_still_fit(simple, scale):
         (np.eye(2), ["0", "0"], "text"),
         ("identity", [0.0, 0.0], "text"),
         ([[1.0, 0.0], [0.0]], [0.0, 0.0], "numeric"),
+        (np.eye(2), [10**400, 0], "too large for a float"),
+        ([[10**400, 0], [0, 1]], [0.0, 0.0], "too large for a float"),
     ],
 )
 def test_complex_or_text_frame_is_refused(A, b, words):
@@ -582,3 +587,19 @@ def test_complex_or_text_times_are_refused(simple):
         model.reproduce(frames, np.linspace(0, 1, 5) + 0j)
     with pytest.raises(InvalidParameterError, match="text"):
         model.reproduce(frames, ["0", "0.5", "1"])
+
+
+@pytest.mark.parametrize(
+    "name, value, words",
+    [
+        ("n_components", True, r"n_components must be a whole number >= 1, got True \(bool\)"),
+        ("max_iter", "100", r"max_iter must be a whole number >= 1, got '100' \(str\)"),
+        ("reg_covar", "1e-3", r"reg_covar must be a finite positive number \(> 0\), got '1e-3'"),
+        ("reg_covar", 0.0, r"reg_covar must be a finite positive number \(> 0\), got 0.0"),
+        ("reg_covar", 10**400, r"reg_covar .* got an integer too large for a float"),
+        ("tol", -1.0, r"tol must be a finite number >= 0, got -1.0"),
+    ],
+)
+def test_a_refused_setting_says_what_it_must_be(name, value, words):
+    with pytest.raises(InvalidParameterError, match=words):
+        TPGMM(**{name: value})

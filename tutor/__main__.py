@@ -41,8 +41,19 @@ def _whole_number(minimum: int):
     return parse
 
 
+class _OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose refusal is one line (exit code 2), like the tutor's own.
+
+    argparse prints the whole usage before the error; a script reading stderr, or a
+    person scanning it, then has to find the one line that says what was wrong.
+    """
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="lfd-tutor", description=__doc__.splitlines()[0])
+    parser = _OneLineParser(prog="lfd-tutor", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
     def common(p):

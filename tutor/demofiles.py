@@ -303,12 +303,7 @@ def _load_json(path: Path, expected) -> DemoSet:
                 f"({len(demos)}), each a list of numbers or null"
             )
         conditions = [
-            None
-            if c is None
-            else _table(
-                [c], len(c) if isinstance(c, list) else 0, f"{path.name}, condition {i + 1}"
-            )[0]
-            for i, c in enumerate(conditions)
+            _condition(c, f"{path.name}, condition {i + 1}") for i, c in enumerate(conditions)
         ]
     return DemoSet(
         demos,
@@ -317,6 +312,19 @@ def _load_json(path: Path, expected) -> DemoSet:
         str(data.get("description", "")),
         conditions,
     )
+
+
+def _condition(value, where: str) -> np.ndarray | None:
+    """One entry of 'conditions': None, or a non-empty list of finite numbers."""
+    if value is None:
+        return None
+    if not isinstance(value, list) or not value:
+        shown = str(value).lower() if isinstance(value, bool) else repr(value)[:40]
+        raise InvalidFileError(
+            f"{where} is {shown}, not a list of numbers; write the condition as a list of "
+            "numbers (e.g. [0.3, -0.2, 0.05]), or null where it was not recorded"
+        )
+    return _table([value], len(value), where)[0]
 
 
 def _table(rows, n_columns: int, where: str) -> np.ndarray:
@@ -405,7 +413,9 @@ def _load_csv(path: Path, expected) -> DemoSet:
                 continue
             if len(row) != len(header):
                 raise InvalidFileError(
-                    f"{where}, line {line_no}: {len(row)} values but the header has {len(header)}"
+                    f"{where}, line {line_no}: {len(row)} values but the header has "
+                    f"{len(header)} ({', '.join(header)}); every line needs one value per "
+                    "column: fix that line"
                 )
             label = row[label_at].strip()
             if not label:
@@ -415,7 +425,10 @@ def _load_csv(path: Path, expected) -> DemoSet:
     except csv.Error as exc:
         raise InvalidFileError(f"{where}, line {reader.line_num}: {exc}") from exc
     if not groups:
-        raise InvalidFileError(f"{where} holds no samples")
+        raise InvalidFileError(
+            f"{where} holds no samples, only the header: add the rows below it, one per "
+            "sample and at least 2 per demonstration"
+        )
     return DemoSet([np.array(g)[:, order] for g in groups.values()], columns)
 
 

@@ -108,7 +108,9 @@ def _open_error(path, what: str, exc: OSError) -> InvalidFileError:
         errno.EACCES: f"{what} {where} cannot be read (no permission): check its permissions",
         errno.EPERM: f"{what} {where} cannot be read (not permitted): check its permissions",
         errno.ENAMETOOLONG: f"{what} {where}: the path is too long; move the file higher up",
-        errno.ELOOP: f"{what} {where}: the path runs through a loop of symbolic links",
+        errno.ELOOP: f"{what} {where}: the path runs through a loop of symbolic links "
+        "(links pointing at each other): replace the link with the file itself, or point "
+        "it at the real file",
     }
     reason = reasons.get(exc.errno)
     if reason is None:
@@ -202,18 +204,18 @@ def read_text(path, what: str = "file") -> str:
         ) from exc
 
 
-class _BadNumber(ValueError):
-    """A JSON number the tutor refuses (raised from the parser's hooks)."""
+class _Refused(ValueError):
+    """A number or key the tutor refuses (raised from the JSON parser's hooks)."""
 
 
 def _refuse_constant(name):
-    raise _BadNumber(f"{name} is not allowed (write a finite number, or leave the entry out)")
+    raise _Refused(f"{name} is not allowed (write a finite number, or leave the entry out)")
 
 
 def _parse_float(text: str) -> float:
     value = float(text)
     if not math.isfinite(value):
-        raise _BadNumber(
+        raise _Refused(
             f"the number {text[:40]} is too large for a floating-point number (the largest "
             "is about 1.8e308): fix or remove it"
         )
@@ -225,19 +227,39 @@ def _parse_int(text: str) -> int:
         value = int(text)
         float(value)
     except (OverflowError, ValueError) as exc:
-        raise _BadNumber(
+        raise _Refused(
             f"the integer {text[:40]}{'...' if len(text) > 40 else ''} ({len(text)} digits) is "
             "too large for a floating-point number (the largest is about 1.8e308): fix or remove it"
         ) from exc
     return value
 
 
+def _unique_keys(pairs: list) -> dict:
+    """An object of the JSON text as a dict, refusing a key given twice.
+
+    ``json`` would keep the last value silently, so a file could say one thing to a
+    person reading it from the top and another to the tutor.
+    """
+    obj = dict(pairs)
+    if len(obj) != len(pairs):
+        seen = set()
+        for key, _ in pairs:
+            if key in seen:
+                shown = key if len(key) <= 40 else f"{key[:40]}..."
+                raise _Refused(
+                    f'the key "{shown}" appears twice in one object, so it is unclear which '
+                    "value is meant: keep one of them and remove the other"
+                )
+            seen.add(key)
+    return obj
+
+
 def read_json(path, what: str = "file"):
     """Parse a JSON file, with a clear :class:`InvalidFileError` for any problem.
 
     Besides what :func:`read_text` refuses: an empty file, invalid JSON, NaN and
-    Infinity, numbers too large for a float (``1e400``, a 400-digit integer) and
-    nesting too deep to parse.
+    Infinity, numbers too large for a float (``1e400``, a 400-digit integer), an
+    object with a key given twice, and nesting too deep to parse.
     """
     text = read_text(path, what)
     if not text.strip():
@@ -248,8 +270,9 @@ def read_json(path, what: str = "file"):
             parse_constant=_refuse_constant,
             parse_float=_parse_float,
             parse_int=_parse_int,
+            object_pairs_hook=_unique_keys,
         )
-    except _BadNumber as exc:
+    except _Refused as exc:
         raise InvalidFileError(f"{what} {_shown(path)}: {exc}") from exc
     except RecursionError as exc:
         raise InvalidFileError(

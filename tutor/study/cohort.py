@@ -42,12 +42,32 @@ __all__ = [
     "run_experiment",
     "simulate_teacher",
     "check_request",
+    "MAX_TEACHERS",
+    "min_teachers",
 ]
 
 EXPERIMENTS = {
     1: {"task": "maze", "conditions": ("NF", "VF", "VR"), "n": 30, "runs": 1},
     2: {"task": "pickplace", "conditions": ("NF", "RF", "BF", "SF"), "n": 36, "runs": 3},
 }
+
+
+#: the largest cohort simulated: 100 times the paper's Experiment 1 (about a quarter of an
+#: hour per core for Experiment 1, more for Experiment 2); larger requests are refused
+#: before any work rather than left running for days
+MAX_TEACHERS = 3000
+
+
+def min_teachers(experiment: int) -> int:
+    """The smallest cohort whose statistics can be computed.
+
+    Experiment 1 (within subjects, k conditions) needs n >= k: Mauchly's sphericity test
+    estimates the (k - 1, k - 1) covariance of the condition contrasts from n - 1 degrees
+    of freedom, and with n = k - 1 its correction factor divides by zero. Experiment 2
+    (between subjects) needs 2 teachers per condition for a variance within each group.
+    """
+    k = len(EXPERIMENTS[experiment]["conditions"])
+    return k if experiment == 1 else 2 * k
 
 
 @dataclass(frozen=True)
@@ -108,14 +128,20 @@ def check_request(experiment, n=None, seed=0) -> tuple[int, int, int]:
     n = spec["n"] if n is None else n
     if not isinstance(n, int | np.integer) or isinstance(n, bool):
         raise InvalidParameterError(f"the number of teachers must be an integer, got {n!r}")
-    k = len(spec["conditions"])
-    if experiment == 1 and n < 2:
+    k, smallest = len(spec["conditions"]), min_teachers(experiment)
+    if n > MAX_TEACHERS:
         raise InvalidParameterError(
-            f"Experiment 1 needs at least 2 teachers for its statistics, got n = {n}"
+            f"Experiment {experiment} can simulate at most {MAX_TEACHERS} teachers (100 times "
+            f"the paper's cohort), got n = {n}; give a smaller n (the paper used {spec['n']})"
         )
-    if experiment == 2 and (n < 2 * k or n % k):
+    if experiment == 1 and n < smallest:
         raise InvalidParameterError(
-            f"Experiment 2 needs a multiple of {k} teachers, at least {2 * k} (2 per "
+            f"Experiment 1 needs at least {smallest} teachers for its statistics (the "
+            f"sphericity test of its {k} conditions), got n = {n}; the paper used 30"
+        )
+    if experiment == 2 and (n < smallest or n % k):
+        raise InvalidParameterError(
+            f"Experiment 2 needs a multiple of {k} teachers, at least {smallest} (2 per "
             f"condition), got n = {n}; the paper used 36"
         )
     if not isinstance(seed, int | np.integer) or isinstance(seed, bool) or seed < 0:
@@ -292,8 +318,9 @@ def run_experiment(
     experiment, n, seed = check_request(experiment, n, seed)
     if workers is None:
         workers = min(os.cpu_count() or 1, n)
-    if not isinstance(workers, int) or workers < 1:
-        raise InvalidParameterError(f"workers must be an integer >= 1, got {workers!r}")
+    if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
+        raise InvalidParameterError(f"workers must be a whole number >= 1, got {workers!r}")
+    workers = min(workers, n)  # a process per teacher at most: never fork idle ones
     bar = None
     if progress:
         from tqdm.auto import tqdm

@@ -50,9 +50,13 @@ def check_out_dir(out) -> Path:
         nearest = nearest.parent
     if not nearest.is_dir():
         what = (
-            "exists and is not a folder" if nearest == out else f"goes through the file {nearest}"
+            "exists and is not a folder"
+            if nearest == out
+            else f"goes through the file {nearest}, which is a file, not a folder"
         )
-        raise SaveError(f"the output folder {out} {what}; give --out a folder (new or existing)")
+        raise SaveError(
+            f"the output folder {out} {what}; give --out another folder (new or existing)"
+        )
     try:
         with tempfile.TemporaryFile(dir=nearest):
             pass

@@ -43,14 +43,18 @@ def check_real_array(value, name: str, error: type[Exception], what: str) -> np.
     Raises
     ------
     error
-        The value is text, complex, ragged or otherwise not a table of real numbers.
+        The value is text, complex, ragged or otherwise not a table of real numbers, or
+        holds an integer too large for a float (such as ``10**400``).
     """
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError) as exc:  # ragged nested lists
         raise error(f"{name} is not a numeric table; give {what}") from exc
     if raw.dtype.kind in "US" or _holds_text(raw):
-        raise error(f"{name} holds text, not numbers; give {what} (convert with float first)")
+        raise error(
+            f"{name} is not a numeric table: it holds text, not numbers; give {what} "
+            "(convert with float first)"
+        )
     if raw.dtype.kind == "c" or _holds_complex(raw):
         raise error(
             f"{name} holds complex numbers; give real numbers: {what} "
@@ -58,6 +62,11 @@ def check_real_array(value, name: str, error: type[Exception], what: str) -> np.
         )
     try:
         return np.array(raw, dtype=float)
+    except OverflowError as exc:  # a Python int beyond float range, e.g. 10**400
+        raise error(
+            f"{name} holds a number too large for a float (above about 1.8e308, so not a "
+            "finite number); fix or remove that value"
+        ) from exc
     except (TypeError, ValueError) as exc:
         raise error(f"{name} is not a numeric table; give {what}") from exc
 
@@ -159,11 +168,11 @@ def check_count(value, name: str, minimum: int = 1) -> int:
     """
     if _is_bool(value) or not isinstance(value, numbers.Integral):
         raise InvalidParameterError(
-            f"{name} must be an integer >= {minimum}, got {value!r} "
+            f"{name} must be a whole number >= {minimum}, got {value!r} "
             f"({type(value).__name__}); write it as a plain number, e.g. {name}={max(minimum, 3)}"
         )
     if value < minimum:
-        raise InvalidParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
+        raise InvalidParameterError(f"{name} must be a whole number >= {minimum}, got {value!r}")
     return int(value)
 
 
@@ -176,14 +185,22 @@ def check_number(value, name: str, minimum: float = 0.0, strict: bool = False) -
         ``value`` is a bool, text, complex, NaN or inf, or out of range.
     """
     bound = f"> {minimum:g}" if strict else f">= {minimum:g}"
+    wanted = (
+        "a finite positive number (> 0)" if strict and minimum == 0 else f"a finite number {bound}"
+    )
     if _is_bool(value) or not isinstance(value, numbers.Real):
         hint = "; write it as a number, e.g. 1e-3, not the text '1e-3'" * isinstance(value, str)
         raise InvalidParameterError(
-            f"{name} must be a real number {bound}, got {value!r} ({type(value).__name__}){hint}"
+            f"{name} must be {wanted}, got {value!r} ({type(value).__name__}){hint}"
         )
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond float range, e.g. 10**400
+        raise InvalidParameterError(
+            f"{name} must be {wanted} below 1e308, got an integer too large for a float"
+        ) from None
     if not np.isfinite(number) or number < minimum or (strict and number == minimum):
-        raise InvalidParameterError(f"{name} must be a finite number {bound}, got {value!r}")
+        raise InvalidParameterError(f"{name} must be {wanted}, got {value!r}")
     return number
 
 
