@@ -504,11 +504,14 @@ ACTIONS = [
 
 
 def second_tutor(app, c, do):
+    """The same run opened again in this kernel (its cell run again): the newer tutor
+    carries on, and the older view, now read-only, changes nothing and says why."""
     other = c.keep(MazeTutor("VF", session_file=app.session_file, trainee=TRAINEE))
-    assert other.read_only, other.message
-    do(other)
-    assert other.record == app.record  # the read-only view changed nothing either
-    return other
+    assert not other.read_only and app.read_only, (other.message, app.message)
+    assert "replaced by a newer one" in app.message
+    do(app)
+    assert other.record == app.record  # the old view changed nothing
+    return app
 
 
 CHILD = textwrap.dedent(

@@ -468,8 +468,10 @@ class TutorApp:
         try:
             self._load(path)
         except TutorError as exc:
+            why = str(exc).rstrip()
+            why = why if why.endswith((".", "!", "?")) else why + "."
             raise type(exc)(
-                f"Nothing was loaded from {path.name}: {exc} This run and its file are "
+                f"Nothing was loaded from {path.name}: {why} This run and its file are "
                 "unchanged."
             ) from exc
         self._autosave()
