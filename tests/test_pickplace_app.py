@@ -28,11 +28,21 @@ def test_tray_shows_only_what_the_condition_shows(task, tmp_path):
     bf = PickPlaceTutor("BF", task=task, seed=0)
     bf.demonstrate(44)
     shown = np.flatnonzero(tray_status(bf.run) != "unknown")
-    assert set(shown) >= {0, 9, 90, 99} and "efficacy" in bf.panel.value
+    assert set(shown) >= {0, 9, 90, 99}
+    # BF shows the five samples, never the totals over all 100 plants (the paper's BF)
+    assert "efficacy" not in bf.panel.value and "tried 5 plants" in bf.panel.value
+    assert "No failures" not in bf.panel.value and "ε" not in bf.panel.value
 
     rf = PickPlaceTutor("RF", task=task, seed=0)
     rf.demonstrate(12)
     assert np.flatnonzero(tray_status(rf.run) != "unknown").tolist() == [12]
+    assert "efficacy" not in rf.panel.value and "The robot tried plant (2, 3)" in rf.panel.value
+
+    practice = PickPlaceTutor("RF", task=task, seed=0, practice=True)
+    practice.demonstrate(12)  # practice shows everything, and says it is practice
+    assert "unknown" not in set(tray_status(practice.run))
+    assert "efficacy" in practice.panel.value and "practice run" in practice.panel.value
+    assert practice.record.practice
 
 
 def test_selected_tests_and_messages(task):

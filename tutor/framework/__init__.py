@@ -3,6 +3,7 @@
 - :mod:`.task`: what a task supplies (test conditions B^, frames, criteria).
 - :mod:`.metrics`: efficacy eps, efficiency eta, the session score.
 - :mod:`.failures`: incorrect, ambiguous and undemonstrated failures.
+- :mod:`.feedback`: the feedback policies (what r is, what totals may be shown).
 - :mod:`.session`: :class:`TeachingSession`, demos in, feedback records out.
 - :mod:`.record`: :class:`RunRecord`, the typed, versioned record of one run (its
   attempts, demos and events), the one file format of a teaching run.
@@ -10,6 +11,7 @@
 """
 
 from .failures import AMBIGUOUS, INCORRECT, UNDEMONSTRATED, TeachingWarning, Thresholds, similarity
+from .feedback import FEEDBACK_POLICIES, Visibility, reveal
 from .metrics import SessionScore, efficacy, efficiency, session_score
 from .record import Attempt, Demo, Event, RunRecord, Test, Trainee
 from .run import RunOverError, TeachingRun
@@ -29,6 +31,9 @@ __all__ = [
     "INCORRECT",
     "UNDEMONSTRATED",
     "FEEDBACK_MODES",
+    "FEEDBACK_POLICIES",
+    "Visibility",
+    "reveal",
     "FeedbackRecord",
     "SessionScore",
     "Task",

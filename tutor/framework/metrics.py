@@ -6,8 +6,16 @@ b the demonstration set with M = |b| demos.
 - Teaching efficacy :math:`\varepsilon = |R^ \cap B^| / |B^|` in [0, 1]: the share of
   test conditions whose realisation meets the task criteria.
 - Teaching efficiency :math:`\eta = \varepsilon / |b|`.
-- The paper's session score (Experiment 1): M is the number of demos needed to first
-  reach 90 % coverage, or all demos if 90 % is never reached; eta is taken there.
+- The paper's session scores, one rule per experiment (:data:`SCORING_RULES`):
+
+  ``"target"`` (Experiment 1): M is the number of demos needed to first reach 90 %
+  coverage, or all demos if 90 % is never reached; eta is taken there.
+
+  ``"final"`` (Experiment 2): the paper states no 90 % rule; eta = eps / |b| of the
+  whole session, eps judged after the last demo and |b| every demo given.
+
+Every score of a run (the tutor's, the simulated cohorts', a class's) comes from
+:func:`run_score`, so they agree.
 """
 
 from __future__ import annotations
@@ -18,7 +26,15 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 
-__all__ = ["efficacy", "efficiency", "SessionScore", "session_score"]
+__all__ = [
+    "efficacy",
+    "efficiency",
+    "SessionScore",
+    "session_score",
+    "final_score",
+    "run_score",
+    "SCORING_RULES",
+]
 
 
 def efficacy(passed) -> float:
@@ -73,3 +89,27 @@ def session_score(efficacies, target: float = 0.9) -> SessionScore:
     hits = np.flatnonzero(eps >= target - 1e-12)
     m = int(hits[0]) + 1 if hits.size else eps.size
     return SessionScore(m, float(eps[m - 1]), float(eps[m - 1]) / m, bool(hits.size))
+
+
+def final_score(efficacies, target: float = 0.9) -> SessionScore:
+    """Experiment 2's score: eta = eps after the last demo / every demo given.
+
+    ``reached`` still says whether ``target`` coverage was reached at some demo.
+    """
+    eps = np.asarray(efficacies, dtype=float)
+    first = session_score(eps, target)  # the same checks, and whether it was reached
+    m = int(eps.size)
+    return SessionScore(m, float(eps[-1]), float(eps[-1]) / m, first.reached)
+
+
+#: the paper's scoring rule of each experiment, by name
+SCORING_RULES = {"target": session_score, "final": final_score}
+
+
+def run_score(efficacies, rule: str, target: float = 0.9) -> SessionScore:
+    """Score a run with the named rule (``"target"``: Experiment 1, ``"final"``: 2)."""
+    if rule not in SCORING_RULES:
+        raise InvalidParameterError(
+            f"scoring rule must be one of {', '.join(SCORING_RULES)}, got {rule!r}"
+        )
+    return SCORING_RULES[rule](efficacies, target)

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import InvalidFileError, InvalidParameterError, TutorError, WrongRunError
 from ..fileio import read_json, write_json
+from .feedback import reveal
 from .record import Attempt, Demo, Event, RunRecord, Test, Trainee, utc_now
 from .session import FeedbackRecord, TeachingSession
 from .task import Task
@@ -61,6 +62,8 @@ class TeachingRun:
     experiment: ClassVar[int] = 0
     #: condition name -> feedback mode
     conditions: ClassVar[dict[str, str]] = {}
+    #: the paper's scoring rule for the experiment (:data:`tutor.framework.metrics.SCORING_RULES`)
+    score_rule: ClassVar[str] = "target"
 
     def __init__(self, task: Task, record: RunRecord, clock=utc_now):
         self.task = task
@@ -154,6 +157,22 @@ class TeachingRun:
     @property
     def finished(self) -> bool:
         return self._record.finished
+
+    def score(self, target: float = 0.9):
+        """The run's score by its experiment's rule (the same for tutor, cohort and class)."""
+        return self.session.score(target, self.score_rule)
+
+    def visibility(self, extra_shown=()):
+        """What the trainee may see now (:func:`tutor.framework.feedback.reveal`)."""
+        rec = self.session.latest
+        shown = () if rec is None else np.r_[rec.shown, np.asarray(extra_shown, dtype=int)]
+        return reveal(
+            self.feedback,
+            len(self.task.conditions),
+            shown,
+            finished=self.finished,
+            practice=self._record.practice,
+        )
 
     def batch(self) -> np.ndarray | None:
         """The conditions shown in ``"batch"`` feedback (override where a task has them)."""

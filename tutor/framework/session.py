@@ -36,12 +36,13 @@ from .failures import (
     similarity,
     undemonstrated_warning,
 )
-from .metrics import SessionScore, efficacy, efficiency, session_score
+from .feedback import FEEDBACK_POLICIES
+from .metrics import SessionScore, efficacy, efficiency, run_score
 from .task import Task
 
 __all__ = ["FeedbackRecord", "TeachingSession", "FEEDBACK_MODES"]
 
-FEEDBACK_MODES = ("none", "all", "replay", "batch", "selected")
+FEEDBACK_MODES = tuple(FEEDBACK_POLICIES)
 
 
 @dataclass(frozen=True)
@@ -186,9 +187,10 @@ class TeachingSession:
             raise InvalidParameterError("no demo yet, so the robot has realised nothing")
         return self._realisations[step]
 
-    def score(self, target: float = 0.9) -> SessionScore:
-        """The paper's score: demos to first reach ``target`` coverage and eta there."""
-        return session_score([r.efficacy for r in self._history], target)
+    def score(self, target: float = 0.9, rule: str = "target") -> SessionScore:
+        """The paper's score (rule ``"target"``: demos to first reach ``target`` coverage
+        and eta there, Experiment 1; ``"final"``: eta after the last demo, Experiment 2)."""
+        return run_score([r.efficacy for r in self._history], rule, target)
 
     # ---------------------------------------------------------------- teaching
 
@@ -348,13 +350,7 @@ class TeachingSession:
         return record, mean
 
     def _shown(self, condition, selected) -> np.ndarray:
-        n = len(self.task.conditions)
-        if self.feedback == "all":
-            return np.arange(n)
-        if self.feedback == "batch":
-            return self.batch.copy()
-        if self.feedback == "replay":
-            return np.array([self.task.nearest_condition(condition)])
-        if self.feedback == "selected":
-            return selected
-        return np.zeros(0, dtype=int)
+        """r for this step, from the feedback policy (:mod:`tutor.framework.feedback`)."""
+        policy = FEEDBACK_POLICIES[self.feedback]
+        own = self.task.nearest_condition(condition) if policy.name == "replay" else -1
+        return policy.shown(len(self.task.conditions), own, self.batch, selected)

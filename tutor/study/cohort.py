@@ -174,7 +174,7 @@ def _task(name: str, settings: StudySettings):
     return _TASKS[key]
 
 
-def run_rows(run, base: dict, ambiguity: float | None, target: float, score: str):
+def run_rows(run, base: dict, ambiguity: float | None, target: float):
     """Summarise one finished run: one row for ``runs`` and its rows for ``demos``.
 
     Failures on the final demonstration set b: *errors* are demos that fail the task
@@ -203,8 +203,8 @@ def run_rows(run, base: dict, ambiguity: float | None, target: float, score: str
             }
         )
     last = history[-1]
-    sc = session.score(target)
-    eta = sc.efficiency if score == "target" else last.efficacy / last.n_demos
+    sc = session.score(target)  # demos to the target coverage, whatever the rule
+    eta = run.score(target).efficiency  # the paper's score of this experiment
     row = {
         **base,
         "n_demos": last.n_demos,
@@ -243,7 +243,7 @@ def simulate_teacher(
         for k, cond in enumerate(spec["conditions"], start=1):
             run = model.teach(cond, _rng(seed, experiment, teacher, k))
             base = {"teacher": teacher, "condition": cond, "run": 1}
-            row, drows = run_rows(run, base, None, settings.target, "target")
+            row, drows = run_rows(run, base, None, settings.target)
             row["followed_rules"] = float(np.mean(run.compliance)) if cond == "VR" else np.nan
             rows.append({**row, **trait_cols})
             demo_rows += drows
@@ -256,7 +256,7 @@ def simulate_teacher(
         for k in range(1, spec["runs"] + 1):
             run = model.teach(cond, _rng(seed, experiment, teacher, k))
             base = {"teacher": teacher, "condition": cond, "run": k}
-            row, drows = run_rows(run, base, settings.pickplace_ambiguity, settings.target, "final")
+            row, drows = run_rows(run, base, settings.pickplace_ambiguity, settings.target)
             row["seconds"] = run.elapsed
             rows.append({**row, **trait_cols})
             demo_rows += drows

@@ -38,6 +38,7 @@ class PickPlaceRun(TeachingRun):
 
     experiment = 2
     conditions = CONDITIONS
+    score_rule = "final"
 
     def __init__(self, condition=None, task: PickPlaceTask | None = None, record=None, **new):
         task = PickPlaceTask() if task is None else task
@@ -171,11 +172,21 @@ class PickPlaceRun(TeachingRun):
 
     # ---------------------------------------------------------------- what the teacher sees
 
+    def tested_plants(self) -> np.ndarray:
+        """The plants the trainee asked the robot to try after the latest demo."""
+        rec = self.session.latest
+        if rec is None:
+            return np.zeros(0, dtype=int)
+        tests = [t.plants for t in self.attempt.tests if t.after_demo == rec.n_demos]
+        return np.array([p for ps in tests for p in ps], dtype=int)
+
     def shown_plants(self) -> np.ndarray:
         """The plants the robot performed after the latest demo (r), for the picture."""
         rec = self.session.latest
         if rec is None:
             return np.zeros(0, dtype=int)
-        tests = [t.plants for t in self.attempt.tests if t.after_demo == rec.n_demos]
-        extra = np.array([p for ps in tests for p in ps], dtype=int)
-        return np.unique(np.r_[rec.shown, extra]).astype(int)
+        return np.unique(np.r_[rec.shown, self.tested_plants()]).astype(int)
+
+    def visibility(self, extra_shown=()):
+        """What the trainee may see: r after the latest demo and the plants tested."""
+        return super().visibility(np.r_[self.tested_plants(), np.asarray(extra_shown, int)])

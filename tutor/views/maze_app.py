@@ -28,7 +28,7 @@ from ..tasks.maze import MazeTask
 from ..tasks.maze_run import CONDITIONS, MazeRun
 from .app import TutorApp, guarded
 from .sketchpad import Sketchpad, layout_spec
-from .text import session_report, summary
+from .text import compose, finish_summary
 
 __all__ = ["MazeTutor", "CONDITIONS", "PAPER_MEDIAN_ETA", "compare_runs", "plot_runs"]
 
@@ -148,46 +148,48 @@ class MazeTutor(TutorApp):
     def refresh(self) -> None:
         """Redraw the sketchpad and the panel from the run."""
         s, rec = self.session, self.session.latest
-        reveal = self.condition != "NF" or self.finished
+        vis = self.run.visibility()
         rule = None
         if self.condition == "VR" and not self.finished:
             advice = self.run.advice()
             if advice.center is not None:
                 rule = {"center": advice.center.tolist(), "radius": advice.radius}
-        if rec is None or not reveal:
-            note = "" if reveal else "No feedback in this run: press Finish when you are done."
+        if rec is None or not len(vis.shown):
+            note = (
+                "No feedback in this run: press Finish when you are done."
+                if self.run.feedback == "none" and not vis.everything
+                else ""
+            )
             self.pad.show(s.demos, rule_circle=rule, note=note)
         else:
-            shown = np.arange(len(rec.passed)) if self.finished else rec.shown
-            self.pad.show(s.demos, s.realisations, rec.passed, shown, rule)
+            self.pad.show(s.demos, s.realisations, rec.passed, vis.shown, rule)
         self.pad.enabled = not self.finished and not self.read_only
         for name in ("Undo", "Reset", "Finish", "Save"):
             self.buttons[name].disabled = self.read_only
-        self.panel.value = self._panel_html(reveal)
+        self.panel.value = self._panel_html(vis)
         self._refresh_common()
 
-    def _panel_html(self, reveal: bool) -> str:
+    def _panel_html(self, vis) -> str:
         s, rec = self.session, self.session.latest
-        parts = [f"<b>Condition {self.condition}</b> &middot; demonstrations: {s.n_demos}"]
-        if rec is not None and reveal:
-            parts.append(
-                f"<div class='lfd-metrics'>efficacy ε = <b>{rec.efficacy:.0%}</b> "
-                f"({100 * rec.delta:+.0f}) &middot; "
-                f"efficiency η = <b>{rec.efficiency:.1%}</b></div>"
-            )
-            lines = summary(rec).splitlines()[1:]
-            parts.append(
-                "<ul>" + "".join(f"<li>{html.escape(x[2:])}</li>" for x in lines) + "</ul>"
-            )
+        practice = " &middot; practice run" if self.record.practice else ""
+        parts = [
+            f"<b>Condition {self.condition}</b>{practice} &middot; demonstrations: {s.n_demos}"
+        ]
+        rule = None
         if self.condition == "VR" and not self.finished:
-            parts.append(f"<div><i>{html.escape(self.run.advice().message)}</i></div>")
+            rule = self.run.advice().message
+        lines = compose(
+            self.task, rec, vis, s.history, rule_message=rule, finished=self.finished
+        )
+        parts.append(
+            "<ul class='lfd-feedback'>"
+            + "".join(f"<li>{html.escape(x)}</li>" for x in lines)
+            + "</ul>"
+        )
         if self.finished and s.n_demos:
-            score = s.score()
+            summary = finish_summary(self.run, PAPER_MEDIAN_ETA[self.condition], "median")
             parts.append(
-                f"<div class='lfd-score'><b>Finished.</b> {html.escape(session_report(s))} "
-                f"(paper's median for {self.condition}: "
-                f"{PAPER_MEDIAN_ETA[self.condition]:.1%}; you used {score.n_demos} "
-                "demonstration(s) to get there)</div>"
+                f"<div class='lfd-score'><b>Finished.</b> {html.escape(summary)}</div>"
             )
         parts.append(self.message_html())
         return "".join(parts)

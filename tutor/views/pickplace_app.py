@@ -25,21 +25,40 @@ from ..tasks.pickplace import PickPlaceTask
 from ..tasks.pickplace_protocol import PickPlaceRun
 from .app import TutorApp, guarded
 from .style import DEMO, FAIL, PASS
-from .text import session_report, summary
+from .text import compose, finish_summary, plain_reason
 
 __all__ = ["PickPlaceTutor", "tray_status", "compare_runs", "PAPER_MEAN_ETA", "PAPER_THIRD_RUN_ETA"]
 
 UNKNOWN = "#d0d0d0"
+TRAY_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
+TRAY_GLYPHS = {"pass": "✓", "fail": "✗", "demo": "●", "unknown": ""}
+STATUS_WORDS = {
+    "pass": "the robot succeeds",
+    "fail": "the robot fails",
+    "demo": "demonstrated",
+    "unknown": "not seen yet",
+}
+
+
+def _set(obj, name: str, value) -> None:
+    """Set a widget trait only when it changes (each change is a message to the browser)."""
+    if getattr(obj, name) != value:
+        setattr(obj, name, value)
 MISTAKES = {"no mistake": None, "wrong plant": "wrong_plant", "sloppy grab": "sloppy_grab"}
 
 
 def tray_status(run: PickPlaceRun, reveal: bool = False) -> np.ndarray:
-    """Status of each plant as the trainee may see it: pass, fail, demo or unknown (100,)."""
+    """Status of each plant as the trainee may see it: pass, fail, demo or unknown (100,).
+
+    Only the plants the condition showed (r, and the plants tested) get pass or fail;
+    ``reveal`` (or a finished or practice run) shows every plant.
+    """
     status = np.full(len(run.task.conditions), "unknown", dtype=object)
     rec = run.session.latest
     if rec is None:
         return status
-    seen = np.arange(len(status)) if reveal else run.shown_plants()
+    vis = run.visibility()
+    seen = np.arange(len(status)) if reveal else vis.shown
     status[seen] = np.where(rec.passed[seen], "pass", "fail")
     status[rec.demonstrated] = "demo"
     return status
@@ -160,7 +179,7 @@ class PickPlaceTutor(TutorApp):
         plant = self.selected if plant is None else plant
         mistake = MISTAKES[self.mistake.value] if mistake is None else mistake
         try:
-            self.run.demonstrate(plant, mistake=mistake, rng=self.rng)
+            self.run.demonstrate(plant, mistake=mistake, rng=self.rng, chosen_by="guided")
             self.message = ""
         except TutorError as exc:
             self.message = str(exc)
@@ -266,13 +285,32 @@ class PickPlaceTutor(TutorApp):
 
     # ---------------------------------------------------------------- display
 
+    def _draw_tray(self, status, rec) -> None:
+        """Colour, glyph and tooltip of every plant; exactly one drawn as selected.
+
+        Status is never shown by colour alone: pass ✓, fail ✗, demonstrated ●, not seen
+        blank; the tooltip names the plant, its status and, for a shown failure, why.
+        """
+        for i, b in enumerate(self.plant_buttons):
+            kind = status[i]
+            words = STATUS_WORDS[kind]
+            if kind == "fail" and rec is not None:
+                words += f": {plain_reason(rec.reasons[i])}"
+            selected = i == self.selected
+            tip = f"{self.task.plant_name(i)}: {words}" + (" (selected)" if selected else "")
+            _set(b.style, "button_color", TRAY_COLOURS[kind])
+            _set(b, "description", TRAY_GLYPHS[kind])
+            _set(b, "tooltip", tip)
+            _set(b.layout, "border", "3px solid #111111" if selected else "1px solid #ffffff")
+            if selected:
+                b.add_class("lfd-selected")
+            else:
+                b.remove_class("lfd-selected")
+
     def refresh(self) -> None:
         run, rec = self.run, self.run.session.latest
         status = tray_status(run, reveal=run.finished)
-        colours = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
-        for i, b in enumerate(self.plant_buttons):
-            b.style.button_color = colours[status[i]]
-            b.description = "●" if i == self.selected else ""
+        self._draw_tray(status, rec)
         sf_or_after = run.condition == "SF" or run.finished
         self.buttons["Test plant"].disabled = not sf_or_after or rec is None or self.read_only
         for name in ("Demonstrate", "Undo"):
@@ -280,21 +318,31 @@ class PickPlaceTutor(TutorApp):
         for name in ("Finish run", "Reset"):
             self.buttons[name].disabled = self.read_only
         self.clock.value = f"<b>Time</b>: {run.clock_text()}"
+        vis = run.visibility()
+        practice = " &middot; practice run" if self.record.practice else ""
         parts = [
-            f"<b>Condition {run.condition}</b> &middot; run {self.record.run} &middot; "
-            f"demonstrations: {run.session.n_demos}"
+            f"<b>Condition {run.condition}</b>{practice} &middot; run {self.record.run} "
+            f"&middot; demonstrations: {run.session.n_demos}"
             f" &middot; selected: {self.task.plant_name(self.selected)}"
         ]
-        if rec is not None and (run.finished or run.condition != "NF"):
-            lines = summary(rec).splitlines()
-            items = "".join(f"<li>{html.escape(x[2:])}</li>" for x in lines[1:])
-            parts.append(f"<div>{html.escape(lines[0])}</div><ul>{items}</ul>")
+        demo = run.attempt.demos[-1] if run.attempt.demos else None
+        lines = compose(
+            self.task,
+            rec,
+            vis,
+            run.session.history,
+            generated=demo is not None and demo.chosen_by == "guided",
+            mistake=demo.mistake if demo is not None else "",
+            finished=run.finished,
+        )
+        parts.append(
+            "<ul class='lfd-feedback'>"
+            + "".join(f"<li>{html.escape(x)}</li>" for x in lines)
+            + "</ul>"
+        )
         if run.finished and rec is not None:
-            report = html.escape(session_report(run.session))
-            parts.append(
-                f"<div class='lfd-score'><b>Run over.</b> {report}"
-                f" (paper's mean for {run.condition}: {PAPER_MEAN_ETA[run.condition]:.1%})</div>"
-            )
+            summary = finish_summary(run, PAPER_MEAN_ETA[run.condition], "mean over three runs")
+            parts.append(f"<div class='lfd-score'><b>Run over.</b> {html.escape(summary)}</div>")
         parts.append(self.message_html())
         self.panel.value = "".join(parts)
         self._refresh_common()

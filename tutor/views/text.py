@@ -1,22 +1,248 @@
-"""Feedback in plain words, for the trainee (the text beside the pictures).
+r"""Feedback in plain words: one voice for every step of a run.
 
-Uses the paper's quantities: efficacy eps (share of the test conditions B^ the
-robot now performs correctly), efficiency eta = eps / |b|, and the failure
-warnings (incorrect, ambiguous, undemonstrated) of :mod:`tutor.framework.failures`.
+One composer (:func:`compose`) writes what the tutor says after each step, in this
+order: **what the robot did**, **what it means**, **what to do next**. It follows the
+run's feedback policy (:mod:`tutor.framework.feedback`): it speaks only of the
+realisations r the trainee was shown, and of the totals (efficacy
+:math:`\varepsilon`, its change, efficiency :math:`\eta = \varepsilon / |b|`, the
+undemonstrated states) only where the condition shows them. Warnings about the demo
+itself (it fails the task; it repeats an earlier demo) need only the demo and are
+always given, without the numbers a condition withholds.
+
+It never contradicts itself: a demo that fails the task but raises coverage gets both
+facts said plainly; VR gets one next step, the rule's; a demonstration the tutor
+generated (the simulated hand) is never blamed on the trainee; and the words are
+plain ("start point", "plant"; no sample numbers).
+
+:func:`finish_summary` gives the one score of a finished run, by its experiment's
+rule (:func:`tutor.framework.metrics.run_score`), beside the paper's figure.
 """
 
 from __future__ import annotations
 
-__all__ = ["summary", "session_report"]
+import re
+
+import numpy as np
+
+from ..framework import AMBIGUOUS, INCORRECT, UNDEMONSTRATED
+
+__all__ = ["compose", "finish_summary", "summary", "session_report", "plain_reason"]
+
+#: the paper's coverage target (Experiment 1's 90 %)
+TARGET = 0.9
+
+
+def plain_reason(reason: str) -> str:
+    """A failure reason without sample numbers ("hit obstacle 2 at sample 57" -> "hit
+    obstacle 2")."""
+    return re.sub(r"\s*\(?\bat sample \d+(?: of \d+)?\)?", "", reason).strip()
+
+
+def _name(task, index: int) -> str:
+    namer = getattr(task, "plant_name", None)
+    return namer(index) if namer is not None else f"{task.condition_noun} {index + 1}"
+
+
+def _plural(k: int, noun: str, nouns: str) -> str:
+    return f"{k} {noun if k == 1 else nouns}"
+
+
+def _did(task, record, vis, n_demos: int) -> str:
+    """What the robot did after the demo, as far as the trainee may see it."""
+    n = len(record.passed)
+    if vis.totals:
+        k = int(np.count_nonzero(record.passed))
+        change = "" if n_demos == 1 else f", {100 * record.delta:+.0f} points"
+        return (
+            f"After demo {n_demos} the robot succeeds from {k} of the {n} "
+            f"{task.condition_noun_plural} (efficacy ε = {record.efficacy:.0%}{change})."
+        )
+    shown = [int(i) for i in vis.shown]
+    if not shown:
+        return f"Demo {n_demos} is recorded. In this condition the robot shows nothing yet."
+    ok = [i for i in shown if record.passed[i]]
+    bad = [i for i in shown if not record.passed[i]]
+    if len(shown) == 1:
+        i = shown[0]
+        verdict = "succeeds" if record.passed[i] else f"fails: {plain_reason(record.reasons[i])}"
+        return f"The robot tried {_name(task, i)}: it {verdict}."
+    text = (
+        f"The robot tried {len(shown)} {task.condition_noun_plural}: {len(ok)} "
+        f"succeed{'s' if len(ok) == 1 else ''}"
+    )
+    if bad:
+        fails = "; ".join(f"{_name(task, i)} {plain_reason(record.reasons[i])}" for i in bad)
+        text += f", {len(bad)} fail{'s' if len(bad) == 1 else ''} ({fails})"
+    return text + "."
+
+
+def _means(task, record, vis, *, generated: bool, mistake: str, wrong_earlier) -> list[str]:
+    """What the step means: the demo's own warnings, and the totals' where shown."""
+    m = record.n_demos
+    lines = []
+    for w in record.warnings:
+        if w.kind == INCORRECT and not record.demo_passed:
+            why = plain_reason(record.demo_reason)
+            if mistake:
+                fact = f"Demo {m} does not do the task (it {why}): the mistake you chose to show."
+                advice = "See what it does to the robot, then undo it."
+            elif generated:
+                fact = f"Guided demo {m} went wrong (it {why}): the hand slipped, not you."
+                advice = "Undo it and demonstrate again."
+            else:
+                fact = f"Demo {m} does not do the task: it {why}."
+                advice = "Undo it and demonstrate that again."
+            if vis.totals and m > 1 and record.delta > 0:
+                fact += (
+                    f" It still raised coverage by {100 * record.delta:.0f} points, but the "
+                    "robot also learns the mistake."
+                )
+            lines.append(f"{fact} {advice}")
+        elif w.kind == AMBIGUOUS:
+            near = record.nearest_demo
+            points = round(100 * record.delta)
+            changed = ""
+            if vis.totals:
+                changed = (
+                    " and did not change efficacy"
+                    if points == 0
+                    else f" and changed efficacy by {points:+d} points"
+                )
+            lines.append(
+                f"Demo {m} is almost the same as demo {near}{changed}: it teaches the robot "
+                "little that is new. Start your next one further from your other demos."
+            )
+        elif w.kind == INCORRECT and vis.totals:  # judged by its effect on the totals
+            eps = record.efficacy
+            verb = "fell to" if record.delta < 0 else "stayed at"
+            change = f"efficacy {verb} {eps:.0%}"
+            if wrong_earlier:
+                many = len(wrong_earlier) > 1
+                nums = ", ".join(map(str, wrong_earlier))
+                advice = (
+                    f"demo{'s' if many else ''} {nums} {'do' if many else 'does'} not do the "
+                    f"task and still mislead{'' if many else 's'} the robot: undo "
+                    f"{'them' if many else 'it'} first."
+                )
+            elif generated:
+                advice = "give the next one from a different place."
+            else:
+                advice = "check it shows the task the way you meant, or try a different place."
+            lines.append(f"Demo {m} made things no better ({change}): {advice}")
+    return lines
+
+
+def _next(task, record, vis, *, rule_message: str | None, first_reached: bool) -> list[str]:
+    """One next step: the rule's in VR; else the target prompt or where to demonstrate."""
+    if rule_message is not None:
+        return [rule_message]
+    if not vis.totals:
+        return []
+    if first_reached:
+        return [f"{TARGET:.0%} of the {task.condition_noun_plural} succeed: you may finish."]
+    if record.efficacy >= TARGET:
+        return []
+    if any(w.kind in (INCORRECT, AMBIGUOUS) for w in record.warnings):
+        return []  # the warning above already says what to do next
+    for w in record.warnings:
+        if w.kind == UNDEMONSTRATED:
+            return [w.message]
+    return []
+
+
+def compose(
+    task,
+    record,
+    vis,
+    history=(),
+    *,
+    rule_message: str | None = None,
+    generated: bool = False,
+    mistake: str = "",
+    finished: bool = False,
+) -> list[str]:
+    """What the tutor says after a step, in order: did, means, next.
+
+    Parameters
+    ----------
+    task : Task
+    record : FeedbackRecord or None
+        The feedback after the latest demo (None before the first).
+    vis : Visibility
+        What the trainee may see (:meth:`tutor.framework.TeachingRun.visibility`).
+    history : sequence of FeedbackRecord
+        The earlier records (for "90 % reached" said once, and earlier wrong demos).
+    rule_message : str, optional
+        VR: the rule that applies next (then it is the only next step).
+    generated : bool
+        The demo was made by the tutor's simulated hand, not drawn by the trainee.
+    mistake : str
+        The mistake the trainee chose to show ("" for none).
+    finished : bool
+        The run is over: only what the robot now does is said (the score follows it).
+    """
+    if record is None:
+        noun = task.condition_noun
+        first = f"No demonstration yet: show the robot the task once, from any {noun}."
+        return [rule_message or first]
+    earlier = [r for r in history if r.n_demos < record.n_demos]
+    reached_before = any(r.efficacy >= TARGET for r in earlier)
+    wrong_earlier = [r.n_demos for r in earlier if not r.demo_passed]
+    lines = [_did(task, record, vis, record.n_demos)]
+    if finished:
+        return lines
+    lines += _means(
+        task, record, vis, generated=generated, mistake=mistake, wrong_earlier=wrong_earlier
+    )
+    lines += _next(
+        task,
+        record,
+        vis,
+        rule_message=rule_message,
+        first_reached=record.efficacy >= TARGET and not reached_before,
+    )
+    return lines
+
+
+def finish_summary(run, paper: float, statistic: str) -> str:
+    """The one score of a finished run, by its experiment's rule, beside the paper's.
+
+    ``paper`` is the paper's figure for the run's condition and ``statistic`` its kind
+    ("median" or "mean").
+    """
+    if run.n_demos == 0:
+        return "No demonstrations were given."
+    s = run.score(TARGET)
+    if run.score_rule == "target":
+        how = (
+            f"{TARGET:.0%} coverage was reached after "
+            f"{_plural(s.n_demos, 'demonstration', 'demonstrations')}"
+            if s.reached
+            else f"{TARGET:.0%} was not reached; after all {s.n_demos} demonstrations the "
+            f"robot succeeds from {s.efficacy:.0%} of the {run.task.condition_noun_plural}"
+        )
+    else:
+        how = (
+            f"after {_plural(s.n_demos, 'demonstration', 'demonstrations')} the robot "
+            f"succeeds at {s.efficacy:.0%} of the {run.task.condition_noun_plural}"
+        )
+    return (
+        f"{how[0].upper()}{how[1:]}: your teaching efficiency is η = {s.efficiency:.1%} "
+        f"(efficacy divided by the number of demonstrations). The paper's {statistic} for "
+        f"{run.condition} was {paper:.1%}."
+    )
+
+
+# ---------------------------------------------------------------- short forms (notebook 01)
 
 
 def summary(record) -> str:
-    """A few lines about one step: the numbers, then each warning."""
+    """A few lines about one step with everything shown (for the framework's notebook)."""
     if record is None:
         return "No demonstration yet: show the robot the task once."
     lines = [
         f"After demo {record.n_demos}: efficacy {record.efficacy:.0%} "
-        f"({100 * record.delta:+.0f} points), efficiency {record.efficiency:.1%}."
+        f"({100 * record.delta:+.0f} points), efficiency η = {record.efficiency:.1%}."
     ]
     lines += [f"- {w.message}" for w in record.warnings]
     if not record.warnings:
@@ -24,8 +250,8 @@ def summary(record) -> str:
     return "\n".join(lines)
 
 
-def session_report(session, target: float = 0.9) -> str:
-    """The paper's score of a run, in words."""
+def session_report(session, target: float = TARGET) -> str:
+    """The paper's Experiment 1 score of a session, in words (for the framework's notebook)."""
     if not session.history:
         return "No demonstrations yet."
     s = session.score(target)
@@ -39,4 +265,4 @@ def session_report(session, target: float = 0.9) -> str:
             f"{target:.0%} coverage not reached; after all {s.n_demos} demos "
             f"efficacy is {s.efficacy:.0%}"
         )
-    return f"{head}: efficiency eta = {s.efficiency:.1%}."
+    return f"{head}: efficiency η = {s.efficiency:.1%}."
