@@ -18,13 +18,16 @@ import argparse
 import os
 import sys
 
+from .study.limits import MAX_TEACHERS
+
 # one BLAS thread per process (set before numpy loads); the cohort uses processes instead
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 
-def _whole_number(minimum: int):
-    """An argparse type: a whole number >= ``minimum``, with a message saying so."""
+def _whole_number(minimum: int, maximum: int | None = None):
+    """An argparse type: a whole number >= ``minimum`` (and <= ``maximum``), with a message
+    saying so."""
 
     def parse(text: str) -> int:
         try:
@@ -35,6 +38,10 @@ def _whole_number(minimum: int):
             ) from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"must be a whole number >= {minimum}, got {value}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(
+                f"must be at most {maximum}, got {value}: give a smaller number"
+            )
         return value
 
     parse.__name__ = f"whole number >= {minimum}"
@@ -66,9 +73,9 @@ def _parser() -> argparse.ArgumentParser:
         )
         p.add_argument(
             "--n",
-            type=_whole_number(1),
+            type=_whole_number(1, MAX_TEACHERS),
             default=None,
-            help="teachers (default the paper's: 30, 36)",
+            help=f"teachers (default the paper's: 30, 36; at most {MAX_TEACHERS})",
         )
         p.add_argument("--out", default="results", help="folder for the files (default results/)")
         p.add_argument(

@@ -9,15 +9,24 @@
 Command line: ``python -m tutor reproduce --experiment 1|2 --seed S --out DIR``.
 """
 
-from .cohort import CohortResult, StudySettings, run_experiment
-from .report import analyse, format_report, robustness, save_result
+import importlib
 
-__all__ = [
-    "CohortResult",
-    "StudySettings",
-    "analyse",
-    "format_report",
-    "robustness",
-    "run_experiment",
-    "save_result",
-]
+#: the names the package offers, and the module each comes from (imported on first use,
+#: so that the command line can check its arguments before pandas and pingouin load)
+_LAZY = {
+    "CohortResult": "cohort",
+    "StudySettings": "cohort",
+    "run_experiment": "cohort",
+    "analyse": "report",
+    "format_report": "report",
+    "robustness": "report",
+    "save_result": "report",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

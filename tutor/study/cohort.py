@@ -34,6 +34,7 @@ import pandas as pd
 from ..errors import InvalidParameterError
 from ..framework.failures import Thresholds, is_ambiguous
 from ..teachers.traits import DEFAULT_POPULATION, Population
+from .limits import MAX_TEACHERS
 
 __all__ = [
     "CohortResult",
@@ -52,10 +53,6 @@ EXPERIMENTS = {
 }
 
 
-#: the largest cohort simulated: 100 times the paper's Experiment 1 (about a quarter of an
-#: hour per core for Experiment 1, more for Experiment 2); larger requests are refused
-#: before any work rather than left running for days
-MAX_TEACHERS = 3000
 
 
 def min_teachers(experiment: int) -> int:
