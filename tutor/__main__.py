@@ -25,7 +25,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 
-def _whole_number(minimum: int, maximum: int | None = None):
+def _whole_number(minimum: int, maximum: int | None = None, unit: str = ""):
     """An argparse type: a whole number >= ``minimum`` (and <= ``maximum``), with a message
     saying so."""
 
@@ -40,7 +40,7 @@ def _whole_number(minimum: int, maximum: int | None = None):
             raise argparse.ArgumentTypeError(f"must be a whole number >= {minimum}, got {value}")
         if maximum is not None and value > maximum:
             raise argparse.ArgumentTypeError(
-                f"must be at most {maximum}, got {value}: give a smaller number"
+                f"must be at most {maximum}{unit}, got {value}: give a smaller number"
             )
         return value
 
@@ -73,7 +73,7 @@ def _parser() -> argparse.ArgumentParser:
         )
         p.add_argument(
             "--n",
-            type=_whole_number(1, MAX_TEACHERS),
+            type=_whole_number(1, MAX_TEACHERS, " teachers"),
             default=None,
             help=f"teachers (default the paper's: 30, 36; at most {MAX_TEACHERS})",
         )
