@@ -158,3 +158,47 @@ def test_upload_widget_adds_recorded_demos(task):
         },
     )
     assert app.run.session.n_demos == 5 and "my corners.json" in app.message
+
+
+def test_controls_one_selected_plant_busy_button_and_mistake_reset(task, monkeypatch):
+    from tutor.views import pickplace_app
+
+    app = PickPlaceTutor("BF", task=task, seed=0)
+    for plant in (3, 57, 12):
+        app.plant_buttons[plant].click()
+    selected = [i for i, b in enumerate(app.plant_buttons) if b.layout.border.startswith("3px")]
+    assert selected == [12] and "(selected)" in app.plant_buttons[12].tooltip
+    app.mistake.value = "sloppy grab"
+    seen = []
+    real = app.demonstrate
+
+    def watch(*args, **kwargs):
+        button = app.buttons["Demonstrate"]
+        seen.append((button.disabled, button.description))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(app, "demonstrate", watch)
+    app.buttons["Demonstrate"].click()
+    app.buttons["Demonstrate"].click()  # a double click: the second arrives at once
+    assert app.run.n_demos == 1 and seen == [(True, "Working…")]
+    assert app.run.attempt.demos[0].mistake == "sloppy_grab"
+    assert app.mistake.value == "no mistake"  # the chooser goes back after each demo
+    assert app.buttons["Demonstrate"].description == "Demonstrate"
+    monkeypatch.setattr(pickplace_app, "DOUBLE_CLICK_SECONDS", 0.0)
+    app.buttons["Demonstrate"].click()  # a deliberate second demo still works
+    assert app.run.n_demos == 2
+
+
+def test_tray_map_is_laid_out_as_the_3d_camera_sees_it(task):
+    app = PickPlaceTutor("BF", task=task, seed=0)
+    cells = app.tray.children
+    cols = task.scene.cols
+    assert "1" in cells[1].value and "10" in cells[cols].value  # column numbers on top
+    first_row = cells[cols + 2 : 2 * cols + 2]
+    assert first_row == tuple(app.plant_buttons[:cols])  # row 1, nearest the robot, on top
+    assert "row 1, at the top" in app.widget.children[0].children[0].value
+    # the 3-D camera looks from the front-right: the robot (x = 0) is at the back, the
+    # tray's +y (higher columns) goes to the right of the screen
+    from tutor.views.scene3d import CAMERA_POSITION
+
+    assert CAMERA_POSITION[0] > 0 and CAMERA_POSITION[1] < 0

@@ -14,6 +14,7 @@ grey, not shown to the trainee (yet).
 from __future__ import annotations
 
 import html
+import time
 
 import ipywidgets as w
 import numpy as np
@@ -30,6 +31,8 @@ from .text import compose, finish_summary, plain_reason
 __all__ = ["PickPlaceTutor", "tray_status", "compare_runs", "PAPER_MEAN_ETA", "PAPER_THIRD_RUN_ETA"]
 
 UNKNOWN = "#d0d0d0"
+#: a click that arrives this soon after a demo ended is the second half of a double click
+DOUBLE_CLICK_SECONDS = 0.4
 TRAY_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
 TRAY_GLYPHS = {"pass": "✓", "fail": "✗", "demo": "●", "unknown": ""}
 STATUS_WORDS = {
@@ -114,12 +117,7 @@ class PickPlaceTutor(TutorApp):
         ]
         for i, b in enumerate(self.plant_buttons):
             b.on_click(lambda _, i=i: self.select(i))
-        # row 0 (nearest the robot) at the bottom, the robot's left (larger y) on the left
-        order = [r * cols + c for r in reversed(range(rows)) for c in reversed(range(cols))]
-        self.tray = w.GridBox(
-            [self.plant_buttons[i] for i in order],
-            layout=w.Layout(grid_template_columns=f"repeat({cols}, 28px)", grid_gap="2px"),
-        )
+        self.tray = self._tray_grid(rows, cols)
         self.mistake = w.Dropdown(
             options=list(MISTAKES),
             value="no mistake",
@@ -131,7 +129,8 @@ class PickPlaceTutor(TutorApp):
             for name in ("Demonstrate", "Test plant", "Undo", "Finish run", "Reset")
         }
         self.buttons["Reset"].tooltip = "Start a new attempt (asks to confirm; nothing is deleted)"
-        self.buttons["Demonstrate"].on_click(lambda _: self.demonstrate())
+        self._demo_ended = -1e9
+        self.buttons["Demonstrate"].on_click(lambda _: self._on_demonstrate())
         self.buttons["Test plant"].on_click(lambda _: self.test())
         self.buttons["Undo"].on_click(lambda _: self.undo())
         self.buttons["Finish run"].on_click(lambda _: self.finish())
@@ -157,7 +156,18 @@ class PickPlaceTutor(TutorApp):
             ]
         )
         self.widget = w.HBox(
-            [w.VBox([w.HTML("<b>Tray</b> (robot at the bottom)"), self.tray]), controls]
+            [
+                w.VBox(
+                    [
+                        w.HTML(
+                            "<b>Tray</b>, seen as in the 3-D view: the robot stands behind "
+                            "row 1, at the top"
+                        ),
+                        self.tray,
+                    ]
+                ),
+                controls,
+            ]
         )
         view3d = getattr(scene3d, "widget", None)
         if view3d is not None:  # the 3-D view under the tray map and the controls
@@ -171,9 +181,38 @@ class PickPlaceTutor(TutorApp):
         self.selected = int(plant)
         self.refresh()
 
+    def _tray_grid(self, rows: int, cols: int) -> w.GridBox:
+        """The plant buttons laid out as the 3-D view's default camera sees the tray: row 1
+        (nearest the robot) at the top, column 1 (the robot's right) on the left; rows and
+        columns are numbered as in the plants' names."""
+        label = {"layout": w.Layout(width="26px", height="26px")}
+        cells = [w.HTML("", **label)]
+        cells += [w.HTML(f"<center><small>{c + 1}</small></center>", **label) for c in range(cols)]
+        for r in range(rows):
+            cells.append(w.HTML(f"<center><small>{r + 1}</small></center>", **label))
+            cells += [self.plant_buttons[r * cols + c] for c in range(cols)]
+        return w.GridBox(
+            cells,
+            layout=w.Layout(grid_template_columns=f"repeat({cols + 1}, 28px)", grid_gap="2px"),
+        )
+
+    def _on_demonstrate(self) -> None:
+        """The Demonstrate button: busy while the demo runs; a double click gives one demo."""
+        if time.monotonic() - self._demo_ended < DOUBLE_CLICK_SECONDS:
+            return  # the second click of a double click, queued while the first ran
+        button = self.buttons["Demonstrate"]
+        button.disabled, button.description, button.icon = True, "Working…", "spinner"
+        try:
+            self.demonstrate()
+        finally:
+            button.description, button.icon = "Demonstrate", ""
+            button.disabled = self.run.finished or self.read_only
+            self._demo_ended = time.monotonic()
+
     @guarded
     def demonstrate(self, plant=None, mistake=None) -> None:
-        """Demonstrate to ``plant`` (default: the selected one)."""
+        """Demonstrate to ``plant`` (default: the selected one); the mistake chooser goes
+        back to "no mistake" afterwards."""
         if self._refuse_if_read_only():
             return
         plant = self.selected if plant is None else plant
@@ -184,6 +223,8 @@ class PickPlaceTutor(TutorApp):
         except TutorError as exc:
             self.message = str(exc)
             return
+        finally:
+            self.mistake.value = "no mistake"
         self._autosave()
 
     @guarded
