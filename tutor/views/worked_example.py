@@ -80,7 +80,7 @@ def instruction_text(experiment: int, condition: str) -> str:
         ) from None
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def example_png(experiment: int, condition: str) -> bytes:
     """Three frames of the worked example of ``condition``, as PNG bytes (kept per kernel)."""
     instruction_text(experiment, condition)  # refuses unknown conditions
@@ -229,9 +229,7 @@ def _tray(ax, task, status, title: str) -> None:
     rows, cols = task.scene.rows, task.scene.cols
     for i, s in enumerate(status):
         r, c = divmod(i, cols)
-        ax.add_patch(
-            _square(cols - 1 - c, r, colours[s])
-        )
+        ax.add_patch(_square(cols - 1 - c, r, colours[s]))
     ax.set_xlim(-0.6, cols - 0.4)
     ax.set_ylim(-1.4, rows - 0.4)
     ax.set_aspect("equal")
