@@ -368,17 +368,24 @@ class PickPlaceExperiment(StartForm):
     Parameters
     ----------
     start : bool, optional
-    scene3d : bool
-        Show the robot in 3-D under each run (:class:`tutor.views.scene3d.Scene3D`).
+    scene3d : bool or {"auto", "live", "static"}
+        Show the robot in 3-D under each run (:class:`tutor.views.scene3d.Scene3D`, in
+        this mode; True is "auto"); False: no 3-D view.
     """
 
     experiment = 2
     title = "Experiment 2: teach the robot arm to pick and place, three times"
 
-    def __init__(self, start: bool | None = None, scene3d: bool = True):
-        self.scene3d = bool(scene3d)
+    def __init__(self, start: bool | None = None, scene3d=True):
+        if scene3d not in (True, False, "auto", "live", "static"):
+            raise InvalidParameterError(
+                f"scene3d must be True, False or a Scene3D mode ('auto', 'live', 'static'), "
+                f"got {scene3d!r}"
+            )
+        self.scene3d = "auto" if scene3d is True else scene3d
         self._fixed_condition = None
         self._condition_problem = None
+        self._task = None
         super().__init__(start)
 
     def _condition_fields(self, notes: list[str]) -> list:
@@ -428,20 +435,24 @@ class PickPlaceExperiment(StartForm):
     def make_tutor(self, step: dict, path: Path):
         from .pickplace_app import PickPlaceTutor
 
-        scene = None
+        scene = task = None
         if self.scene3d:
             from .scene3d import Scene3D
 
-            scene = Scene3D()
-        return PickPlaceTutor(
+            scene = Scene3D(task=self._task, mode=self.scene3d)
+            task = scene.task
+        tutor = PickPlaceTutor(
             step["condition"],
             session_file=path,
+            task=task if task is not None else self._task,
             trainee=self.trainee,
             run=step["run"],
             seed=step["run"],
             scene3d=scene,
             practice=self.practice_run,
         )
+        self._task = tutor.task  # one task (and its arm) for all three runs
+        return tutor
 
     def autoplay_one(self, tutor) -> None:
         plants, mistakes = PICKPLACE_AUTOPLAY[tutor.record.run]
@@ -489,8 +500,6 @@ def maze_experiment(start: bool | None = None) -> MazeExperiment:
     return MazeExperiment(start=start)
 
 
-def pick_and_place_experiment(
-    start: bool | None = None, scene3d: bool = True
-) -> PickPlaceExperiment:
+def pick_and_place_experiment(start: bool | None = None, scene3d=True) -> PickPlaceExperiment:
     """The start form of Experiment 2 (pick-and-place): name, condition, practice, Start."""
     return PickPlaceExperiment(start=start, scene3d=scene3d)
