@@ -89,7 +89,7 @@ def condition_from_env() -> str | None:
     if value.upper() not in PICKPLACE_CONDITIONS:
         raise InvalidParameterError(
             f"TUTOR_CONDITION is {value!r}, which is not a condition of Experiment 2: set it "
-            f"to one of {', '.join(PICKPLACE_CONDITIONS)} (or unset it to let trainees choose)"
+            f"to one of {', '.join(PICKPLACE_CONDITIONS)} (or unset it to let trainees choose)."
         )
     return value.upper()
 
@@ -160,7 +160,7 @@ class StartForm:
         if fixed_name:
             notes.append("Your name was set by your educator (TUTOR_TRAINEE).")
         self._extra_fields = self._condition_fields(notes)
-        self.note.value = "<br>".join(html.escape(n) for n in notes)
+        self.note.value = "<br>".join(html.escape(n, quote=False) for n in notes)
         form = w.VBox(
             [
                 w.HTML(f"<b>{html.escape(self.title)}</b>"),
@@ -198,7 +198,7 @@ class StartForm:
     def _say(self, text: str, problem: bool = False) -> None:
         self.problem = text if problem else None
         style = ' style="color:#b00020"' if problem else ""
-        self.note.value = f"<span{style}>{html.escape(text)}</span>"
+        self.note.value = f"<span{style}>{html.escape(text, quote=False)}</span>"
 
     def start(self) -> None:
         """What Start does: check the name, then show the first run that is not finished.
@@ -413,7 +413,7 @@ class PickPlaceExperiment(StartForm):
                 f"Your condition, {self._fixed_condition}, was set by your educator "
                 "(TUTOR_CONDITION)."
             )
-        else:
+        elif self._condition_problem is None:
             notes.append("Choose the condition your educator gave you.")
         return [self.condition_buttons]
 
