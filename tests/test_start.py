@@ -70,7 +70,7 @@ def test_run_file_names_are_the_notebooks():
 def test_the_form_waits_for_start_and_shows_nf_first(person, tmp_path):
     form = maze_experiment()
     assert form.tutors == [] and form.stage.children == ()
-    assert "Type your name" in form.results()
+    assert "press Start" in form.results()
     form.name.value = "Zoë"
     form.go.click()
     assert [t.condition for t in form.tutors] == ["NF"]

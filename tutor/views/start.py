@@ -488,7 +488,10 @@ class PickPlaceExperiment(StartForm):
 def _not_yet(form: StartForm) -> str:
     done = sum(t.finished for t in form.tutors)
     if form.trainee is None:
-        return "Type your name above and press Start first."
+        return (
+            "Not started yet: type your name above and press Start. Your results appear "
+            "there when every run is finished (or run this cell again then)."
+        )
     return (
         f"{done} of {len(form.plan())} runs are finished: finish them all, then run this "
         "cell again."
