@@ -15,8 +15,9 @@ dropped), then the key is a readable ASCII part of it followed by a short hash o
 whole normalised name. Direction overrides (which reorder text on screen) are refused.
 So 'Mai Anh' and 'Mai_Anh', two different Devanagari names or two emoji get different
 folders, while 'Zoë' typed as NFC or as NFD gets the same one. Keys are lower-case
-ASCII (safe on case-insensitive file systems) and at most 52 characters. On a
-JupyterHub, ``JUPYTERHUB_USER`` is the default name.
+ASCII (safe on case-insensitive file systems) and at most 52 characters. An educator
+can set the name with ``TUTOR_TRAINEE``; else, on a JupyterHub, ``JUPYTERHUB_USER`` is
+the default name.
 """
 
 from __future__ import annotations
@@ -88,9 +89,16 @@ def trainee_key(name) -> str:
 
 
 def default_trainee() -> str:
-    """The trainee's name when none is typed: ``JUPYTERHUB_USER`` on a hub, else "trainee"."""
-    user = os.environ.get("JUPYTERHUB_USER", "").strip()
-    return user or "trainee"
+    """The trainee's name when none is typed.
+
+    ``TUTOR_TRAINEE`` when an educator set it, else ``JUPYTERHUB_USER`` on a hub, else
+    "trainee".
+    """
+    for var in ("TUTOR_TRAINEE", "JUPYTERHUB_USER"):
+        user = os.environ.get(var, "").strip()
+        if user:
+            return user
+    return "trainee"
 
 
 def sessions_root() -> Path:

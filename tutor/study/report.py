@@ -10,9 +10,10 @@ import numpy as np
 import pandas as pd
 
 from .. import paper
-from ..errors import SaveError
+from ..errors import InvalidFileError, InvalidParameterError, SaveError
+from ..resources import asset
 from . import replication, stats
-from .cohort import CohortResult, run_experiment
+from .cohort import EXPERIMENTS, CohortResult, StudySettings, run_experiment
 
 __all__ = [
     "check_out_dir",
@@ -22,7 +23,15 @@ __all__ = [
     "save_result",
     "robustness",
     "robustness_summary",
+    "load_result",
+    "load_robustness",
+    "BUNDLED",
 ]
+
+#: the paper-sized cohorts bundled with the tutor, as ``lfd-tutor reproduce`` and
+#: ``lfd-tutor robustness`` wrote them (seed 0; seeds 0-9): notebook 04 reads them
+#: instead of simulating for a minute
+BUNDLED = asset("cohorts")
 
 
 def check_out_dir(out) -> Path:
@@ -284,4 +293,118 @@ def robustness_summary(table: pd.DataFrame) -> str:
         chance = replication.chance_of_at_least(8, 10, rate)
         where = "" if len(known) == len(table) else f", from {len(known)} seeds"
         lines.append(f"  {name}: {rate:.2f} (8 of 10: {chance:.2f}{where})")
+    return "\n".join(lines)
+
+
+def _check_experiment(experiment) -> int:
+    if experiment not in EXPERIMENTS or isinstance(experiment, bool):
+        raise InvalidParameterError(
+            f"experiment must be 1 (maze) or 2 (pick-and-place), got {experiment!r}"
+        )
+    return int(experiment)
+
+
+def _read_csv(path: Path, what: str) -> pd.DataFrame:
+    if not path.is_file():
+        raise InvalidFileError(
+            f"{path} is missing: write it with `lfd-tutor {what} --out {path.parent}`"
+        )
+    try:
+        return pd.read_csv(path)
+    except (ValueError, OSError, UnicodeDecodeError) as exc:
+        raise InvalidFileError(
+            f"{path} cannot be read as the CSV file `lfd-tutor {what}` writes ({exc}); "
+            "write it again with that command"
+        ) from exc
+
+
+def load_result(experiment: int, folder=None) -> CohortResult:
+    """A cohort saved by :func:`save_result` (``lfd-tutor reproduce --out folder``).
+
+    Parameters
+    ----------
+    experiment : {1, 2}
+    folder : path, optional
+        Where ``experiment<N>_runs.csv``, ``_demos.csv`` and ``_summary.json`` are;
+        default the paper-sized cohorts bundled with the tutor (:data:`BUNDLED`).
+
+    Raises
+    ------
+    InvalidFileError
+        A file is missing or is not what the command writes.
+    """
+    experiment = _check_experiment(experiment)
+    folder = BUNDLED if folder is None else Path(folder)
+    stem = f"experiment{experiment}"
+    command = f"reproduce --experiment {experiment}"
+    runs = _read_csv(folder / f"{stem}_runs.csv", command)
+    demos = _read_csv(folder / f"{stem}_demos.csv", command)
+    summary_path = folder / f"{stem}_summary.json"
+    try:
+        summary = json.loads(summary_path.read_text(encoding="utf-8"))
+        seed, settings = int(summary["seed"]), StudySettings(**summary["settings"])
+        if summary["experiment"] != experiment:
+            raise ValueError(f"it holds experiment {summary['experiment']!r}")
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise InvalidFileError(
+            f"{summary_path} is not the summary `lfd-tutor {command}` writes ({exc}); "
+            "write it again with that command"
+        ) from exc
+    order = list(EXPERIMENTS[experiment]["conditions"])
+    for frame in (runs, demos):
+        if "condition" not in frame or not frame["condition"].isin(order).all():
+            raise InvalidFileError(
+                f"the files of experiment {experiment} in {folder} hold conditions other "
+                f"than {', '.join(order)}: write them again with `lfd-tutor {command}`"
+            )
+        frame["condition"] = pd.Categorical(frame["condition"], categories=order, ordered=True)
+    return CohortResult(experiment, seed, runs, demos, settings)
+
+
+def load_robustness(experiment: int, folder=None) -> pd.DataFrame:
+    """A robustness table saved by ``lfd-tutor robustness --out folder`` (default: bundled)."""
+    experiment = _check_experiment(experiment)
+    folder = BUNDLED if folder is None else Path(folder)
+    return _read_csv(
+        folder / f"experiment{experiment}_robustness.csv",
+        f"robustness --experiment {experiment} --seeds 10",
+    )
+
+
+def seeds_report(table: pd.DataFrame, experiment: int) -> str:
+    """The levels of a robustness table beside the paper's: means over the seeds.
+
+    Experiment 1: the median eta per condition (mean over seeds) and the relative
+    improvements (range and median over seeds). Experiment 2: the mean eta per condition,
+    BF's relative improvement, and the failure counts averaged over the seeds. Then
+    :func:`robustness_summary` (the seeds where each conclusion holds).
+    """
+    experiment = _check_experiment(experiment)
+    conds = EXPERIMENTS[experiment]["conditions"]
+    first, last = int(table["seed"].min()), int(table["seed"].max())
+    kind, ref = (
+        ("median", paper.EXPERIMENT_1["median_eta"])
+        if experiment == 1
+        else (
+            "mean",
+            paper.EXPERIMENT_2["mean_eta"],
+        )
+    )
+    lines = [f"Over seeds {first}-{last} ({len(table)} cohorts of the paper's size):", ""]
+    lines.append(f"{kind} eta per condition, mean over the seeds (paper):")
+    lines += [f"  {c}: {_pct(table[f'eta {c}'].mean())} ({_pct(ref[c])})" for c in conds]
+    relative = [c for c in table.columns if c.startswith("relative ")]
+    lines.append("relative improvement over the seeds, range (median):")
+    for c in relative:
+        values = table[c].dropna()
+        lines.append(
+            f"  {c[len('relative ') :]}: {_pct(values.min())}-{_pct(values.max())} "
+            f"({_pct(values.median())})"
+        )
+    if experiment == 2:
+        lines.append("failures over all teachers and runs, mean over the seeds (paper):")
+        for failure, counts in paper.EXPERIMENT_2["failures"].items():
+            cells = [f"{c} {table[f'{failure} {c}'].mean():.0f} ({counts[c]})" for c in conds]
+            lines.append(f"  {failure}: " + ", ".join(cells))
+    lines += ["", robustness_summary(table)]
     return "\n".join(lines)

@@ -1,0 +1,508 @@
+"""The start forms: taking part in an experiment without editing any code.
+
+A trainee types their name, (Experiment 2) picks the condition their educator gave them,
+ticks *practice run* if they only want to try the tutor, and presses **Start**. The form
+then shows the runs one after another, each beginning with its condition's short
+instruction and worked example (:mod:`tutor.views.worked_example`):
+
+- Experiment 1 (:func:`maze_experiment`): NF, then VF, then VR, the paper's order. Each
+  run appears when the previous one is finished, so the NF run is taught before the
+  trainee has ever seen what the robot learns (as in the paper); finished runs stay on
+  the page, with what they revealed.
+- Experiment 2 (:func:`pick_and_place_experiment`): runs 1, 2 and 3 in the chosen
+  condition, one after another in the same way.
+
+When every run is finished the trainee's scores are shown beside the paper's.
+
+Run files go to ``tutor.runtime.session_dir(name)``: ``NF.json``, ``VF.json``,
+``VR.json`` and ``pickplace_<condition>_run<k>.json`` (practice runs get the prefix
+``practice_``, so they never mix with the counted ones). A run file that exists is
+resumed, so running the cell again after a restart carries on where the trainee was.
+
+For an educator (e.g. a workshop), from the environment of the notebook server:
+
+``TUTOR_TRAINEE``
+    The trainee's name (see :func:`tutor.runtime.default_trainee`); the name field is
+    then locked. Without it, ``JUPYTERHUB_USER`` is the default on a hub.
+``TUTOR_CONDITION``
+    Experiment 2's condition (NF, RF, BF or SF); the condition buttons are then locked
+    and say why. A value that is not a condition is refused with a message.
+``TUTOR_HEADLESS=1``
+    Automated runs: the form starts itself with the default name and feeds the bundled
+    demonstrations to every run (:meth:`StartForm.autoplay`).
+
+Stable CSS classes for browser tests: ``lfd-start-form`` (the whole form),
+``lfd-start-name``, ``lfd-start-condition``, ``lfd-start-practice``, ``lfd-start-go``
+(the Start button), ``lfd-start-note`` and ``lfd-start-results``.
+"""
+
+from __future__ import annotations
+
+import html
+import os
+from pathlib import Path
+
+import ipywidgets as w
+
+from ..errors import InvalidParameterError, TutorError
+from ..runtime import default_trainee, headless, normalise_name, session_dir
+from ..tasks.maze_run import PHASE_ORDER
+from ..tasks.pickplace_protocol import CONDITIONS as PICKPLACE_CONDITIONS
+from ..tasks.pickplace_protocol import RUNS
+from .worked_example import instruction_widget
+
+__all__ = [
+    "StartForm",
+    "MazeExperiment",
+    "PickPlaceExperiment",
+    "maze_experiment",
+    "pick_and_place_experiment",
+    "condition_from_env",
+    "run_file_name",
+    "MAZE_AUTOPLAY",
+    "PICKPLACE_AUTOPLAY",
+]
+
+#: headless runs: the bundled demonstration set fed to each maze phase
+MAZE_AUTOPLAY = {"NF": "maze_undemonstrated", "VF": "maze_good", "VR": "maze_good"}
+#: headless runs: the plants (and deliberate mistakes) demonstrated in each run
+PICKPLACE_AUTOPLAY = {
+    1: ([44, 0, 99, 9, 90, 22, 77], {3: "wrong_plant"}),
+    2: ([0, 99, 9, 90, 44], {}),
+    3: ([0, 99, 90, 9], {}),
+}
+#: the condition offered first when neither the trainee nor the educator chose one
+DEFAULT_CONDITION = "BF"
+
+
+def condition_from_env() -> str | None:
+    """Experiment 2's condition set by the educator in ``TUTOR_CONDITION``, or None.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``TUTOR_CONDITION`` is set but is not one of NF, RF, BF, SF.
+    """
+    value = os.environ.get("TUTOR_CONDITION", "").strip()
+    if not value:
+        return None
+    if value.upper() not in PICKPLACE_CONDITIONS:
+        raise InvalidParameterError(
+            f"TUTOR_CONDITION is {value!r}, which is not a condition of Experiment 2: set it "
+            f"to one of {', '.join(PICKPLACE_CONDITIONS)} (or unset it to let trainees choose)."
+        )
+    return value.upper()
+
+
+def run_file_name(experiment: int, condition: str, run: int = 1, practice: bool = False) -> str:
+    """The file name of a run in the trainee's folder, e.g. ``VF.json``."""
+    stem = condition if experiment == 1 else f"pickplace_{condition}_run{run}"
+    return f"{'practice_' if practice else ''}{stem}.json"
+
+
+class StartForm:
+    """Name, condition, practice and Start; then the experiment's runs one after another.
+
+    Subclasses say which runs there are (:meth:`plan`), how to build one
+    (:meth:`make_tutor`), what headless runs feed it (:meth:`autoplay_one`) and how the
+    results read (:meth:`results`).
+
+    Parameters
+    ----------
+    start : bool, optional
+        Start at once (default: only in headless runs, ``TUTOR_HEADLESS=1``, which then
+        also feed the bundled demonstrations to every run).
+
+    Attributes
+    ----------
+    widget : ipywidgets.VBox
+        The form and, below it, the runs.
+    tutors : list
+        The runs' tutors built so far, in order.
+    trainee : str or None
+        The name the runs are recorded under (None until Start).
+    """
+
+    experiment = 0
+    title = ""
+
+    def __init__(self, start: bool | None = None):
+        self.tutors: list = []
+        self.trainee: str | None = None
+        self.folder: Path | None = None
+        self.practice_run = False
+        self.problem: str | None = None
+        fixed_name = os.environ.get("TUTOR_TRAINEE", "").strip()
+        self.name = w.Text(
+            value=fixed_name,
+            placeholder=default_trainee(),
+            description="Your name",
+            disabled=bool(fixed_name),
+            layout=w.Layout(width="320px"),
+        )
+        self.name.add_class("lfd-start-name")
+        self.practice = w.Checkbox(
+            value=False,
+            description="Practice run (you see everything; not counted in the class results)",
+            indent=False,
+            layout=w.Layout(width="520px"),
+        )
+        self.practice.add_class("lfd-start-practice")
+        self.go = w.Button(description="Start", button_style="primary", icon="play")
+        self.go.add_class("lfd-start-go")
+        self.go.on_click(lambda _: self.start())
+        self.note = w.HTML()
+        self.note.add_class("lfd-start-note")
+        self.results_box = w.Output()
+        self.results_box.add_class("lfd-start-results")
+        self.stage = w.VBox()
+        notes = []
+        if fixed_name:
+            notes.append("Your name was set by your educator (TUTOR_TRAINEE).")
+        self._extra_fields = self._condition_fields(notes)
+        self.note.value = "<br>".join(html.escape(n, quote=False) for n in notes)
+        form = w.VBox(
+            [
+                w.HTML(f"<b>{html.escape(self.title)}</b>"),
+                self.name,
+                *self._extra_fields,
+                self.practice,
+                w.HBox([self.go]),
+                self.note,
+            ]
+        )
+        self.widget = w.VBox([form, self.stage, self.results_box])
+        self.widget.add_class("lfd-start-form")
+        if start is None:
+            start = headless()
+        if start:
+            self.start()
+            if headless():
+                self.autoplay()
+
+    # ---------------------------------------------------------------- the form
+
+    def _condition_fields(self, notes: list[str]) -> list:
+        """Extra widgets of the form (Experiment 2: the condition); may add to ``notes``."""
+        return []
+
+    @property
+    def condition(self) -> str | None:
+        """The chosen condition (Experiment 2), None for Experiment 1."""
+        return None
+
+    def _lock_form(self) -> None:
+        for field in (self.name, self.practice, self.go, *self._extra_fields):
+            field.disabled = True
+
+    def _say(self, text: str, problem: bool = False) -> None:
+        self.problem = text if problem else None
+        style = ' style="color:#b00020"' if problem else ""
+        self.note.value = f"<span{style}>{html.escape(text, quote=False)}</span>"
+
+    def start(self) -> None:
+        """What Start does: check the name, then show the first run that is not finished.
+
+        A wrong name (empty after trimming, control characters, too long) or condition is
+        said in the form and nothing starts.
+        """
+        if self.trainee is not None:
+            return
+        try:
+            typed = self.name.value
+            name = normalise_name(typed if typed.strip() else default_trainee())
+            self.check_ready()
+            folder = session_dir(name)
+        except TutorError as exc:
+            self._say(str(exc), problem=True)
+            return
+        self.trainee, self.folder = name, folder
+        self.practice_run = bool(self.practice.value)
+        self._lock_form()
+        what = "a practice run" if self.practice_run else "counted runs"
+        self._say(
+            f"Welcome, {name}. These are {what}; they are saved in {folder.resolve()} after "
+            "every step, so you can close the notebook and carry on later."
+        )
+        self._advance()
+
+    def check_ready(self) -> None:
+        """Raise a TutorError when the form cannot start (Experiment 2: no condition)."""
+
+    # ---------------------------------------------------------------- the runs
+
+    def plan(self) -> list[dict]:
+        """The runs in order: dicts with ``condition``, ``run`` and ``label``."""
+        raise NotImplementedError
+
+    def make_tutor(self, step: dict, path: Path):
+        """The tutor of one run, saving to ``path``."""
+        raise NotImplementedError
+
+    @property
+    def current(self):
+        """The tutor being taught now (None before Start or when all are finished)."""
+        if self.tutors and not self.tutors[-1].finished:
+            return self.tutors[-1]
+        return None
+
+    @property
+    def finished(self) -> bool:
+        """True when every run of the experiment is finished."""
+        return len(self.tutors) == len(self.plan()) and all(t.finished for t in self.tutors)
+
+    def _advance(self) -> None:
+        """Show the next run while the last one shown is finished (resumed runs may be)."""
+        steps = self.plan()
+        while len(self.tutors) < len(steps) and (not self.tutors or self.tutors[-1].finished):
+            step = steps[len(self.tutors)]
+            path = self.folder / run_file_name(
+                self.experiment, step["condition"], step["run"], self.practice_run
+            )
+            tutor = self.make_tutor(step, path)
+            self.tutors.append(tutor)
+            for button in tutor.buttons.values():
+                button.on_click(lambda _: self._after_click())
+            header = w.HTML(f"<h3>{html.escape(step['label'])}</h3>")
+            intro = instruction_widget(self.experiment, step["condition"], self.practice_run)
+            self.stage.children = (*self.stage.children, header, intro, tutor.widget)
+        if self.finished:
+            self._show_results()
+
+    def _after_click(self) -> None:
+        if self.tutors and self.tutors[-1].finished:
+            self._advance()
+
+    def _show_results(self) -> None:
+        self.results_box.clear_output()
+        with self.results_box:
+            self.show_results()
+
+    def show_results(self) -> None:
+        """Display the trainee's scores beside the paper's (into the results area)."""
+        print(self.results())
+
+    def results(self) -> str:
+        """The trainee's results beside the paper's, once every run is finished."""
+        raise NotImplementedError
+
+    # ---------------------------------------------------------------- headless runs
+
+    def autoplay(self) -> None:
+        """Headless runs only (``TUTOR_HEADLESS=1``): feed each run its bundled demos.
+
+        Starts the form with the default name first if needed; does nothing when a
+        person runs the notebook, and skips runs that are already finished.
+        """
+        if not headless():
+            return
+        self.start()
+        if self.trainee is None:  # the form refused to start and says why
+            raise InvalidParameterError(self.problem or "the form did not start")
+        while self.current is not None:
+            tutor = self.current
+            self.autoplay_one(tutor)
+            if not tutor.finished:
+                raise InvalidParameterError(
+                    f"the bundled demonstrations did not finish the {tutor.condition} run: "
+                    f"{tutor.message}"
+                )
+            self._advance()
+
+    def autoplay_one(self, tutor) -> None:
+        raise NotImplementedError
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)
+
+
+class MazeExperiment(StartForm):
+    """Experiment 1 for one trainee: NF, VF, VR (see the module docstring)."""
+
+    experiment = 1
+    title = "Experiment 1: teach the robot the maze, three times"
+
+    def plan(self) -> list[dict]:
+        return [
+            {"condition": c, "run": 1, "label": f"Run {k} of 3 · {c}"}
+            for k, c in enumerate(PHASE_ORDER, start=1)
+        ]
+
+    def make_tutor(self, step: dict, path: Path):
+        from .maze_app import MazeTutor
+
+        return MazeTutor(
+            step["condition"], session_file=path, trainee=self.trainee, practice=self.practice_run
+        )
+
+    def autoplay_one(self, tutor) -> None:
+        from ..demofiles import bundled_demos
+
+        tutor.autoplay(bundled_demos(MAZE_AUTOPLAY[tutor.condition]))
+
+    def show_results(self) -> None:
+        import matplotlib.pyplot as plt
+        from IPython.display import display
+
+        from .maze_app import plot_runs
+
+        fig, ax = plt.subplots(figsize=(5, 3.5))
+        plot_runs(self.tutors, ax=ax)
+        display(fig)
+        plt.close(fig)
+        print(self.results())
+
+    def results(self) -> str:
+        from .maze_app import compare_runs
+
+        if not self.finished:
+            return _not_yet(self)
+        return compare_runs(self.tutors)
+
+
+class PickPlaceExperiment(StartForm):
+    """Experiment 2 for one trainee: three runs in one condition (see the module docstring).
+
+    Parameters
+    ----------
+    start : bool, optional
+    scene3d : bool or {"auto", "live", "static"}
+        Show the robot in 3-D under each run (:class:`tutor.views.scene3d.Scene3D`, in
+        this mode; True is "auto"); False: no 3-D view.
+    """
+
+    experiment = 2
+    title = "Experiment 2: teach the robot arm to pick and place, three times"
+
+    def __init__(self, start: bool | None = None, scene3d=True):
+        if scene3d not in (True, False, "auto", "live", "static"):
+            raise InvalidParameterError(
+                f"scene3d must be True, False or a Scene3D mode ('auto', 'live', 'static'), "
+                f"got {scene3d!r}"
+            )
+        self.scene3d = "auto" if scene3d is True else scene3d
+        self._fixed_condition = None
+        self._condition_problem = None
+        self._task = None
+        super().__init__(start)
+
+    def _condition_fields(self, notes: list[str]) -> list:
+        try:
+            self._fixed_condition = condition_from_env()
+        except InvalidParameterError as exc:
+            self._condition_problem = str(exc)
+            notes.append(f"{exc} Ask your educator.")
+        self.condition_buttons = w.ToggleButtons(
+            options=list(PICKPLACE_CONDITIONS),
+            value=self._fixed_condition or DEFAULT_CONDITION,
+            description="Condition",
+            tooltips=[
+                "NF: no feedback while teaching",
+                "RF: the robot replays the plant you demonstrated",
+                "BF: the robot tries five sample plants after each demo",
+                "SF: you choose which plants the robot tries",
+            ],
+            style={"button_width": "56px"},
+            disabled=self._fixed_condition is not None,
+        )
+        self.condition_buttons.add_class("lfd-start-condition")
+        if self._fixed_condition is not None:
+            notes.append(
+                f"Your condition, {self._fixed_condition}, was set by your educator "
+                "(TUTOR_CONDITION)."
+            )
+        elif self._condition_problem is None:
+            notes.append("Choose the condition your educator gave you.")
+        return [self.condition_buttons]
+
+    @property
+    def condition(self) -> str:
+        return self.condition_buttons.value
+
+    def check_ready(self) -> None:
+        if self._condition_problem is not None:
+            raise InvalidParameterError(self._condition_problem)
+
+    def plan(self) -> list[dict]:
+        c = self.condition
+        return [
+            {"condition": c, "run": k, "label": f"Run {k} of {RUNS} · {c}"}
+            for k in range(1, RUNS + 1)
+        ]
+
+    def make_tutor(self, step: dict, path: Path):
+        from .pickplace_app import PickPlaceTutor
+
+        scene = task = None
+        if self.scene3d:
+            from .scene3d import Scene3D
+
+            scene = Scene3D(task=self._task, mode=self.scene3d)
+            task = scene.task
+        tutor = PickPlaceTutor(
+            step["condition"],
+            session_file=path,
+            task=task if task is not None else self._task,
+            trainee=self.trainee,
+            run=step["run"],
+            seed=step["run"],
+            scene3d=scene,
+            practice=self.practice_run,
+        )
+        self._task = tutor.task  # one task (and its arm) for all three runs
+        return tutor
+
+    def autoplay_one(self, tutor) -> None:
+        plants, mistakes = PICKPLACE_AUTOPLAY[tutor.record.run]
+        tutor.autoplay(plants, mistakes=mistakes)
+
+    def save_scene(self, run: int = 1) -> Path | None:
+        """Write run ``run``'s 3-D view as one HTML page beside the run file; prints where.
+
+        Returns the path, or None (and says why) when that run has no 3-D view yet.
+        """
+        if not (isinstance(run, int) and 1 <= run <= len(self.tutors)):
+            print(f"Run {run} has not started yet: press Start and teach it first.")
+            return None
+        tutor = self.tutors[run - 1]
+        if tutor.scene3d is None:
+            print(f"Run {run} has no 3-D view (the experiment was made with scene3d=False).")
+            return None
+        stem = Path(tutor.session_file or run_file_name(2, tutor.condition, run)).stem
+        saved = tutor.scene3d.save_html(self.folder / f"{stem}_3d.html")
+        print(f"Saved {saved} ({saved.stat().st_size / 1e6:.1f} MB)")
+        animation = tutor.scene3d.animation
+        print(animation.label if animation else "Nothing animated yet.")
+        return saved
+
+    def results(self) -> str:
+        from .pickplace_app import compare_runs
+
+        if not self.finished:
+            return _not_yet(self)
+        return compare_runs(self.tutors)
+
+
+def _not_yet(form: StartForm) -> str:
+    done = sum(t.finished for t in form.tutors)
+    if form.trainee is None:
+        return (
+            "Not started yet: type your name above and press Start. Your results appear "
+            "there when every run is finished (or run this cell again then)."
+        )
+    return (
+        f"{done} of {len(form.plan())} runs are finished: finish them all, then run this "
+        "cell again."
+    )
+
+
+def maze_experiment(start: bool | None = None) -> MazeExperiment:
+    """The start form of Experiment 1 (the maze): name, practice, Start; then NF, VF, VR."""
+    return MazeExperiment(start=start)
+
+
+def pick_and_place_experiment(start: bool | None = None, scene3d=True) -> PickPlaceExperiment:
+    """The start form of Experiment 2 (pick-and-place): name, condition, practice, Start."""
+    return PickPlaceExperiment(start=start, scene3d=scene3d)

@@ -1,0 +1,244 @@
+"""The short instruction each condition begins with: a few words and one worked example.
+
+Sena & Howard began every condition with a short instruction for it. Here each one is
+two or three plain sentences and a strip of three frames drawn from a bundled example
+teacher: what a demonstration looks like, what the trainee is then shown under *this*
+condition, and what comes next. The frames are drawn once per kernel (matplotlib,
+about a second) and kept.
+
+- :func:`instruction_text` the words, per experiment and condition;
+- :func:`example_png` the three frames as one PNG image;
+- :func:`instruction_widget` both, as a widget shown above the condition's tutor.
+"""
+
+from __future__ import annotations
+
+import functools
+import html
+import io
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+from ..framework import Trainee
+from .style import AMBIGUOUS, DEMO, FAIL, PASS
+
+__all__ = ["INSTRUCTIONS", "instruction_text", "example_png", "instruction_widget"]
+
+#: the words of each condition's instruction, (experiment, condition) -> text
+INSTRUCTIONS = {
+    (1, "NF"): (
+        "No feedback. Draw a path from the shaded start zone to the purple target. "
+        "You will not see what the robot learned until you press Finish, so decide "
+        "yourself where your next demonstration should start."
+    ),
+    (1, "VF"): (
+        "Visual feedback. After each demonstration the robot tries the maze from 140 "
+        "start points: green lines succeed, orange ones fail. Start your next "
+        "demonstration where the lines fail."
+    ),
+    (1, "VR"): (
+        "Visual feedback and rules. You see the same lines, and a dashed circle marks "
+        "where the paper's rules say your next demonstration should start. Start inside "
+        "the circle."
+    ),
+    (2, "NF"): (
+        "No feedback. Pick a plant on the tray map and press Demonstrate. You will not "
+        "see what the robot learned until you finish the run, so choose the plants "
+        "yourself."
+    ),
+    (2, "RF"): (
+        "Replay. After each demonstration the robot tries the plant you just showed it: "
+        "green if it succeeds, orange if it fails. It costs 25 s of your 15 minutes."
+    ),
+    (2, "BF"): (
+        "Batch. After each demonstration the robot tries five plants, the four corners "
+        "and the centre: green succeeds, orange fails. It costs 125 s of your 15 minutes."
+    ),
+    (2, "SF"): (
+        "You choose the tests. After a demonstration, select a plant and press Test "
+        "plant to see whether the robot can pick it (25 s each). You see only the plants "
+        "you ask for."
+    ),
+}
+
+#: the plants the pick-and-place example demonstrates, and the ones SF asks to test
+_EXAMPLE_PLANTS = (44, 0)
+_SF_TESTS = (99, 9)
+_UNKNOWN = "#d0d0d0"
+
+
+def instruction_text(experiment: int, condition: str) -> str:
+    """The instruction of ``condition`` in ``experiment`` (1 maze, 2 pick-and-place)."""
+    try:
+        return INSTRUCTIONS[(experiment, condition)]
+    except (KeyError, TypeError):
+        known = ", ".join(c for e, c in INSTRUCTIONS if e == experiment) or "none"
+        raise InvalidParameterError(
+            f"there is no instruction for condition {condition!r} of experiment "
+            f"{experiment!r}; experiment 1 or 2, with its conditions ({known})"
+        ) from None
+
+
+@functools.cache
+def example_png(experiment: int, condition: str) -> bytes:
+    """Three frames of the worked example of ``condition``, as PNG bytes (kept per kernel)."""
+    instruction_text(experiment, condition)  # refuses unknown conditions
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(9.0, 3.6), layout="constrained")
+    try:
+        if experiment == 1:
+            _maze_frames(axes, condition)
+        else:
+            _pickplace_frames(axes, condition)
+        buffer = io.BytesIO()
+        fig.savefig(buffer, format="png", dpi=80)
+    finally:
+        plt.close(fig)
+    return buffer.getvalue()
+
+
+def instruction_widget(experiment: int, condition: str, practice: bool = False):
+    """The instruction and the worked example as one widget (CSS class ``lfd-instruction``)."""
+    import ipywidgets as w
+
+    words = instruction_text(experiment, condition)
+    if practice:
+        words += " This is a practice run: you see everything, and it is not counted."
+    heading = w.HTML(
+        f"<b>Condition {html.escape(condition)}: how it works</b><br>{html.escape(words)}"
+    )
+    frames = w.Image(value=example_png(experiment, condition), format="png")
+    frames.layout.max_width = "720px"
+    box = w.VBox([heading, frames])
+    box.add_class("lfd-instruction")
+    return box
+
+
+# ------------------------------------------------------------------------ the maze
+
+
+def _maze_frames(axes, condition: str) -> None:
+    from ..demofiles import bundled_demos
+    from ..tasks.maze import MazeTask
+    from ..tasks.maze_run import MazeRun
+    from .maze import draw_maze, realisations_at
+
+    task = MazeTask()
+    # VR: a teacher whose third demo starts inside the rules' circle; else the good one
+    demos = bundled_demos("maze_undemonstrated" if condition == "VR" else "maze_good")[:4]
+    run = MazeRun.new(condition, task, trainee=Trainee.from_name("worked example"))
+    advice = []
+    for demo in demos:
+        run.add_demo(demo)
+        advice.append(run.advice() if condition == "VR" else None)
+    session = run.session
+
+    def frame(ax, n_demos, realised, title):
+        draw_maze(ax, task.layout, zone_label=False)
+        step = n_demos - 1
+        if realised:
+            paths = realisations_at(session, step)
+            passed = np.asarray(session.history[step].passed, dtype=bool)
+            for path, ok in zip(paths, passed, strict=True):
+                ax.plot(path[:, 0], path[:, 1], color=PASS if ok else FAIL, lw=0.6, alpha=0.7)
+        for k, demo in enumerate(demos[:n_demos]):
+            points = task.preprocess(demo)
+            ax.plot(points[:, 1], points[:, 2], color=DEMO, lw=2.2)
+            ax.annotate(
+                str(k + 1),
+                points[0, 1:],
+                color=DEMO,
+                fontsize=9,
+                weight="bold",
+                xytext=(3, -10),
+                textcoords="offset points",
+            )
+        ax.set_title(title, fontsize=9)
+        for hide in (ax.set_xticks, ax.set_yticks):
+            hide([])
+        ax.set_xlabel("")
+        ax.set_ylabel("")
+
+    frame(axes[0], 1, False, "1. You draw a demonstration")
+    if condition == "NF":
+        frame(axes[1], 3, False, "2. You see only your own paths")
+        frame(axes[2], 3, True, "3. After Finish: what it learned")
+    elif condition == "VF":
+        frame(axes[1], 3, True, "2. Robot's tries: green ok, orange fail")
+        frame(axes[2], 4, True, "3. Demo 4 where they failed")
+    else:
+        import matplotlib.patches as mpatches
+
+        frame(axes[1], 2, True, "2. The circle: start inside it")
+        rule = advice[1]
+        if rule is not None and rule.center is not None:
+            axes[1].add_patch(
+                mpatches.Circle(
+                    rule.center, rule.radius, fill=False, ls="--", lw=2, color=AMBIGUOUS, zorder=5
+                )
+            )
+        frame(axes[2], 3, True, "3. Demo 3 from the circle")
+
+
+# ------------------------------------------------------------------------ pick and place
+
+
+def _pickplace_frames(axes, condition: str) -> None:
+    from ..tasks.pickplace import PickPlaceTask
+    from ..tasks.pickplace_protocol import PickPlaceRun
+
+    task = PickPlaceTask()
+    run = PickPlaceRun.new(condition, task, trainee=Trainee.from_name("worked example"))
+    rng = np.random.default_rng(1)
+    first, second = _EXAMPLE_PLANTS
+    run.demonstrate(first, rng=rng)
+    shown_after_first = _status(run, reveal=False)
+    if condition == "SF":
+        run.test(list(_SF_TESTS))
+        shown_after_first = _status(run, reveal=False)
+    run.demonstrate(second, rng=rng)
+    revealed = _status(run, reveal=True)
+
+    demo_only = np.full(len(task.conditions), "unknown", dtype=object)
+    demo_only[first] = "demo"
+    _tray(axes[0], task, demo_only, f"1. You demonstrate {task.plant_name(first)}")
+    captions = {
+        "NF": "2. You see nothing more",
+        "RF": "2. The robot tries that plant",
+        "BF": "2. The robot tries five plants",
+        "SF": "2. You see the plants you test",
+    }
+    _tray(axes[1], task, shown_after_first, captions[condition])
+    if condition == "NF":
+        _tray(axes[2], task, revealed, "3. After the run: every plant")
+    else:
+        _tray(axes[2], task, _status(run, reveal=False), "3. After the next demo")
+
+
+def _status(run, reveal: bool) -> np.ndarray:
+    from .pickplace_app import tray_status
+
+    return tray_status(run, reveal=reveal)
+
+
+def _tray(ax, task, status, title: str) -> None:
+    """The tray as the map draws it: row 0 (nearest the robot) at the bottom."""
+    colours = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": _UNKNOWN}
+    rows, cols = task.scene.rows, task.scene.cols
+    for i, s in enumerate(status):
+        r, c = divmod(i, cols)
+        ax.add_patch(_square(cols - 1 - c, r, colours[s]))
+    ax.set_xlim(-0.6, cols - 0.4)
+    ax.set_ylim(-1.4, rows - 0.4)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    ax.text((cols - 1) / 2, -1.1, "robot side", ha="center", va="center", fontsize=8)
+    ax.set_title(title, fontsize=9)
+
+
+def _square(x, y, colour):
+    import matplotlib.patches as mpatches
+
+    return mpatches.Rectangle((x - 0.42, y - 0.42), 0.84, 0.84, color=colour, lw=0)
