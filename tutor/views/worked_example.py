@@ -224,17 +224,22 @@ def _status(run, reveal: bool) -> np.ndarray:
 
 
 def _tray(ax, task, status, title: str) -> None:
-    """The tray as the map draws it: row 0 (nearest the robot) at the bottom."""
+    """The tray as the map draws it (as the 3-D view's camera sees it): row 1, nearest
+    the robot, at the top; column 1 on the left; status by colour and glyph."""
     colours = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": _UNKNOWN}
+    glyphs = {"pass": "✓", "fail": "✗", "demo": "●", "unknown": ""}
     rows, cols = task.scene.rows, task.scene.cols
     for i, s in enumerate(status):
         r, c = divmod(i, cols)
-        ax.add_patch(_square(cols - 1 - c, r, colours[s]))
+        ax.add_patch(_square(c, rows - 1 - r, colours[s]))
+        if glyphs[s]:
+            ax.text(c, rows - 1 - r, glyphs[s], ha="center", va="center", fontsize=5,
+                    color="white")
     ax.set_xlim(-0.6, cols - 0.4)
-    ax.set_ylim(-1.4, rows - 0.4)
+    ax.set_ylim(-0.6, rows + 0.6)
     ax.set_aspect("equal")
     ax.axis("off")
-    ax.text((cols - 1) / 2, -1.1, "robot side", ha="center", va="center", fontsize=8)
+    ax.text((cols - 1) / 2, rows + 0.3, "robot side", ha="center", va="center", fontsize=8)
     ax.set_title(title, fontsize=9)
 
 
