@@ -8,6 +8,9 @@ running. This module fixes both without patching meshcat:
 
 - :class:`LoopbackBridge` subclasses ``meshcat.servers.zmqserver.ZMQWebSocketBridge``
   so that its web server binds 127.0.0.1 and its ZeroMQ socket ``tcp://127.0.0.1``.
+  Besides meshcat's page (``/static/``) it serves the tutor's (``/lfd/``,
+  ``static/scene3d_live.html``): the same viewer, which also records when each update
+  of the tutor was applied (the browser tests read it).
 - ``python -m tutor.views.meshcat_server --parent-pid PID`` runs it and prints
   ``zmq_url=...`` and ``web_url=...`` like meshcat does. A tornado ``PeriodicCallback``
   checks twice a second that the parent process (the kernel) still lives and stops
@@ -40,6 +43,7 @@ from pathlib import Path
 from urllib.parse import urlparse
 
 from ..errors import InvalidParameterError, TutorError
+from .scene_page import LIVE_PAGE
 
 __all__ = [
     "LOOPBACK",
@@ -96,6 +100,8 @@ def _bridge_class():
 
         def make_app(self):
             app = super().make_app()
+            # the tutor's own viewer page (meshcat's, plus the "update applied" stamp)
+            app.add_handlers(r".*", [(LIVE_PAGE, _live_page_handler())])
             listen = app.listen
 
             def listen_on_loopback(port, address=None, **kwargs):
@@ -106,6 +112,21 @@ def _bridge_class():
             return app
 
     return LoopbackBridge
+
+
+def _live_page_handler():
+    """The tornado handler of the tutor's live viewer page (``static/scene3d_live.html``)."""
+    import tornado.web
+
+    from .scene_page import static_text
+
+    class LivePage(tornado.web.RequestHandler):
+        def get(self):
+            self.set_header("Content-Type", "text/html; charset=utf-8")
+            self.set_header("Cache-Control", "no-store")
+            self.write(static_text("scene3d_live.html"))
+
+    return LivePage
 
 
 def _parent_alive(pid: int) -> bool:
