@@ -64,7 +64,7 @@ def test_the_fifteen_minute_cap(task):
     assert run.remaining < SHORTEST_DEMO_SECONDS + 125.0 and run.out_of_time
     assert run.attempt.stopped == ""  # over by the clock, not finished yet: undo still allowed
     before = run.record
-    with pytest.raises(RunOverError, match=r"only \d:\d\d of the 15 minutes is left"):
+    with pytest.raises(RunOverError, match=r"over: only \d:\d\d of the 15 minutes is left"):
         run.demonstrate(3, rng=rng)
     assert run.record == before  # refused: nothing changed
     assert run.elapsed <= run.cap and "of 15:00 used" in run.clock_text()
@@ -84,7 +84,7 @@ def test_a_demo_that_cannot_end_by_the_cap_is_not_started(task):
     run.spend(run.cap - (seconds + 125.0) + 0.5)  # half a second short of this demo's cost
     assert not run.finished and run.fits(seconds - 1.0) and not run.fits(seconds)
     used = run.elapsed
-    with pytest.raises(RunOverError, match=r"only 2:\d\d of the 15 minutes is left.*not started"):
+    with pytest.raises(RunOverError, match=r"Only 2:\d\d of the 15 minutes is left.*not started"):
         run.demonstrate(44, raw=raw)
     assert run.n_demos == 0 and run.elapsed == used and not run.attempt.finished
     shorter = raw[raw[:, 0] <= raw[-1, 0] - 1.0]  # a second shorter: it fits

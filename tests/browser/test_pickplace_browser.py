@@ -214,7 +214,7 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
     run2.get_by_role("button", name="Demonstrate", exact=True).click()
     run2.get_by_text(re.compile(r"of the 15 minutes is left")).wait_for(timeout=60_000)
     text = run2.inner_text()
-    assert f"only {clock(two.remaining)} of the 15 minutes is left: not enough" in text
+    assert f"Only {clock(two.remaining)} of the 15 minutes is left: not enough" in text
     assert "not started" in text and _n_demos(run2) == n2
     run2.screenshot(path=str(artifacts / "pickplace_cap_refused.png"))
     # run 3 has 1:40 left, less than the shortest demo and the 5 attempts after it

@@ -136,7 +136,7 @@ class PickPlaceRun(TeachingRun):
     def _check_open(self) -> None:
         if self.out_of_time and not super().finished:
             raise RunOverError(
-                f"this run is over: only {clock(self.remaining)} of the "
+                f"This run is over: only {clock(self.remaining)} of the "
                 f"{self.cap / 60:g} minutes is left, too little for another demonstration"
                 f"{self._with_feedback(SHORTEST_DEMO_SECONDS)}. Your last complete "
                 "demonstration counts: press Finish run, then start the next run"
@@ -167,7 +167,7 @@ class PickPlaceRun(TeachingRun):
         self._check_open()
         if seconds is not None and not self.fits(seconds):
             raise RunOverError(
-                f"only {clock(self.remaining)} of the {self.cap / 60:g} minutes is left: not "
+                f"Only {clock(self.remaining)} of the {self.cap / 60:g} minutes is left: not "
                 f"enough for this demonstration{self._with_feedback(seconds)}, so it was not "
                 "started. A shorter one may fit; or press Finish run to end the run with "
                 "your last complete demonstration"
