@@ -7,7 +7,7 @@ import pytest
 
 from tutor.errors import InvalidParameterError
 from tutor.tasks.pickplace import PickPlaceTask
-from tutor.tasks.pickplace_protocol import PickPlaceRun, RunOverError
+from tutor.tasks.pickplace_protocol import SHORTEST_DEMO_SECONDS, PickPlaceRun, RunOverError
 
 
 @pytest.fixture(scope="module")
@@ -59,19 +59,59 @@ def test_the_fifteen_minute_cap(task):
     while not run.finished:
         run.demonstrate(int(rng.integers(100)), rng=rng)
         n += 1
-    assert run.elapsed >= run.cap and n <= 7  # ~11 s demo + 125 s of feedback each
-    with pytest.raises(RunOverError, match="15 minutes"):
+    # every demo ended by 15:00 (~11 s demo + 125 s of feedback each); no room for another
+    assert run.elapsed <= run.cap and n <= 7
+    assert run.remaining < SHORTEST_DEMO_SECONDS + 125.0 and run.out_of_time
+    assert run.attempt.stopped == ""  # over by the clock, not finished yet: undo still allowed
+    before = run.record
+    with pytest.raises(RunOverError, match=r"over: only \d:\d\d of the 15 minutes is left"):
         run.demonstrate(3, rng=rng)
-    assert "15:00" in run.clock_text()
-    # the demo that ran past the cap may still be taken back; no time comes back
-    used = run.elapsed
-    run.undo()
-    assert run.n_demos == n - 1 and run.finished and run.elapsed == pytest.approx(used)
+    assert run.record == before  # refused: nothing changed
+    assert run.elapsed <= run.cap and "of 15:00 used" in run.clock_text()
     run.finish()
-    assert run.attempt.stopped == "time"
+    assert run.attempt.stopped == "time" and run.n_demos == n
     with pytest.raises(RunOverError):
         run.undo()  # once finished, nothing changes
-    assert run.n_demos == n - 1
+    assert run.n_demos == n
+
+
+def test_a_demo_that_cannot_end_by_the_cap_is_not_started(task):
+    """The paper's rule: a demo that would push the clock past 15:00 is not started."""
+    rng = np.random.default_rng(3)
+    raw = task.demonstrate(44, rng)
+    seconds = task.duration(raw)
+    run = PickPlaceRun("BF", task)
+    run.spend(run.cap - (seconds + 125.0) + 0.5)  # half a second short of this demo's cost
+    assert not run.finished and run.fits(seconds - 1.0) and not run.fits(seconds)
+    used = run.elapsed
+    with pytest.raises(RunOverError, match=r"Only 2:\d\d of the 15 minutes is left.*not started"):
+        run.demonstrate(44, raw=raw)
+    assert run.n_demos == 0 and run.elapsed == used and not run.attempt.finished
+    shorter = raw[raw[:, 0] <= raw[-1, 0] - 1.0]  # a second shorter: it fits
+    run.demonstrate(44, raw=shorter)
+    assert run.n_demos == 1 and run.elapsed <= run.cap and run.finished  # nothing else fits
+    # RF pays one attempt, SF and NF none: a demo fits with less time left
+    for cond, attempts in (("RF", 1), ("SF", 0), ("NF", 0)):
+        other = PickPlaceRun(cond, task)
+        other.spend(other.cap - seconds - 25.0 * attempts)
+        assert other.fits(seconds) and not other.fits(seconds + 0.5)
+        other.demonstrate(44, raw=raw)
+        assert other.elapsed == pytest.approx(other.cap)
+
+
+def test_a_resumed_run_near_the_cap_refuses_and_ends(task, tmp_path):
+    rng = np.random.default_rng(4)
+    run = PickPlaceRun("RF", task)
+    run.demonstrate(5, rng=rng)
+    run.spend(run.cap - run.elapsed - 30.0)  # 0:30 left: shorter than a demo and a replay
+    path = run.save(tmp_path / "run.json")
+    again = PickPlaceRun.load(path, task)
+    assert again.finished and again.out_of_time and again.attempt.stopped == ""
+    with pytest.raises(RunOverError, match="0:30 of the 15 minutes is left.*last complete"):
+        again.demonstrate(6, rng=rng)
+    assert again.n_demos == 1
+    again.finish()
+    assert again.attempt.stopped == "time"
 
 
 def test_bad_plants_and_conditions(task):

@@ -232,7 +232,9 @@ def _pickplace_step(run, step) -> list[str]:
     kind, *args = step
     if kind == "demo":
         plant, seed = args
-        refused = RunOverError if run.finished else None
+        seconds = run.task.duration(run.task.demonstrate(plant, seed))
+        # a demo that cannot end by the 15-minute cap is not started
+        refused = RunOverError if run.finished or not run.fits(seconds) else None
         return _try(run, refused, lambda: run.demonstrate(plant, rng=seed), ["add"])
     if kind == "spend":
         return _try(run, None, lambda: run.spend(args[0]), ["spend"])

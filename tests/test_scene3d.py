@@ -280,6 +280,14 @@ def test_bad_input_is_named(task):
         Scene3D(task, mode="static", seconds=0)
 
 
+def _track(clip, name):
+    """A packed track's key times (k,) and values (k, n), decoded from Float32Arrays."""
+    (t,) = [t for t in clip["tracks"] if t["name"] == name]
+    times = np.frombuffer(t["times"].data, dtype="<f4") / clip["fps"]
+    values = np.frombuffer(t["values"].data, dtype="<f4").reshape(len(times), -1)
+    return times, values, t["interpolation"]
+
+
 def test_one_realisation_animates_smoothly(task):
     tutor = PickPlaceTutor("RF", task=task, seed=4)
     tutor.demonstrate(44)
@@ -288,22 +296,65 @@ def test_one_realisation_animates_smoothly(task):
     scene = Scene3D(task, mode="static")
     info = scene.animate(path, "test")
     assert info.frames == 200 and 20 <= info.fps <= 30 and 8 <= info.duration <= 12
+    assert 40 <= info.keys <= 60  # 5 keys a second, not every sample
     (anim,) = [c for c in _scene_commands(scene.static_html()) if c["type"] == "set_animation"]
+    assert anim["options"] == {"play": True, "repetitions": 1}  # plays once by itself
     clips = {a["path"]: a["clip"] for a in anim["animations"]}
-    assert len([p for p in clips if "/robot/visuals/" in p]) == 11  # every Panda link moves
-    hand = clips["/meshcat/lfd/hand"]
-    assert hand["fps"] == pytest.approx(info.fps)
-    (pos,) = [t for t in hand["tracks"] if t["name"] == ".position"]
-    times = np.array([k["time"] for k in pos["keys"]]) / hand["fps"]
-    assert np.allclose(np.diff(times), 1 / info.fps) and times[-1] == pytest.approx(info.duration)
-    xyz = np.array([k["value"] for k in pos["keys"]])
-    assert np.abs(xyz - path[:, :3]).max() < 0.01  # the hand follows the path
-    assert np.linalg.norm(np.diff(xyz, axis=0), axis=1).max() < 0.03  # no jumps per key
-    # the "closed" marker is shown exactly while the hand is closed
-    closed = clips["/meshcat/lfd/hand/closed"]
-    (scale,) = [t for t in closed["tracks"] if t["name"] == ".scale"]
-    shown = np.array([k["value"][0] > 0.5 for k in scale["keys"]])
-    assert np.array_equal(shown, path[:, 3] >= 0.5) and shown.any() and not shown.all()
+    links = [p for p in clips if "/robot/visuals/" in p]
+    assert len(links) == 10 and not any("link0" in p for p in links)  # the base never moves
+    times, xyz, interpolation = _track(clips["/meshcat/lfd/hand"], ".position")
+    assert len(times) == info.keys and interpolation == 2301  # linear between keys
+    assert times[0] == 0 and times[-1] == pytest.approx(info.duration, abs=1e-5)
+    keys = np.round(times * info.fps).astype(int)
+    assert np.allclose(times * info.fps, keys, atol=1e-3)  # keys sit on samples
+    assert np.abs(xyz - path[keys, :3]).max() < 0.01  # the hand follows the path
+    # linear interpolation between the keys stays within 1 cm of every sample
+    between = np.column_stack(
+        [np.interp(np.arange(len(path)) / info.fps, times, xyz[:, j]) for j in range(3)]
+    )
+    assert np.abs(between - path[:, :3]).max() < 0.01
+    # every link's rotation track is unit quaternions without sign flips from key to key
+    for link in links:
+        _, q, _ = _track(clips[link], ".quaternion")
+        assert np.allclose(np.linalg.norm(q, axis=1), 1, atol=1e-5)
+        assert np.all(np.sum(q[1:] * q[:-1], axis=1) > 0)
+    # the "closed" marker is shown exactly while the hand is closed: one key per switch
+    times, scale, interpolation = _track(clips["/meshcat/lfd/hand/closed"], ".scale")
+    assert interpolation == 2300  # discrete: it switches, it does not grow
+    closed = path[:, 3] >= 0.5
+    switches = np.flatnonzero(np.diff(closed)) + 1
+    assert len(times) == 1 + len(switches)
+    assert np.allclose(times[1:] * info.fps, switches)
+    shown = scale[:, 0] > 0.5
+    assert shown[0] == closed[0] and np.array_equal(shown[1:], closed[switches])
+
+
+def test_replay_sends_the_same_animation_again(task):
+    scene = Scene3D(task, mode="static", robot=False)
+    assert scene.replay() is False  # nothing animated yet
+    sent = _open_view(scene)
+    tutor = PickPlaceTutor("RF", task=task, scene3d=scene, seed=2)
+    tutor.demonstrate(30)
+    *_, first = [c for _, b in sent for c in _frames(b[0]) if c["type"] == "set_animation"]
+    assert first["animations"]
+    assert not scene.replay_button.disabled
+    sent.clear()
+    scene.replay_button.click()
+    ((content, buffers),) = sent
+    assert content == {"type": "update"}
+    assert _frames(buffers[0]) == [first]  # only the animation, played again
+
+
+def test_unchanged_trails_are_not_sent_again(task):
+    scene = Scene3D(task, mode="static", robot=False)
+    tutor = PickPlaceTutor("NF", task=task, scene3d=scene, seed=3)
+    tutor.demonstrate(10)
+    sent = _open_view(scene)
+    tutor.demonstrate(60)
+    (_, buffers), *_ = sent
+    trails = {c["path"] for c in _frames(buffers[0]) if "/trails/" in c["path"]}
+    # the new demo's trail and the animated one; demo 1's trail stays as it was
+    assert trails == {"/meshcat/lfd/trails/demos/1", "/meshcat/lfd/trails/animated/0"}
 
 
 def test_tutor_updates_the_scene(task):
@@ -328,7 +379,7 @@ def test_tutor_updates_the_scene(task):
     nf = PickPlaceTutor("NF", task=task, scene3d=Scene3D(task, mode="static", robot=False))
     nf.demonstrate(7)
     assert nf.scene3d.animation.label.startswith("Your demonstration 1")
-    assert "Animated" in nf.scene3d.widget.children[0].value
+    assert "Animated" in nf.scene3d._caption.value
 
 
 def test_sf_scene_animates_the_plant_just_tested(task):
@@ -439,7 +490,10 @@ def test_live_scene_streams_to_the_loopback_server(task):
     assert scene.mode == "live"
     url = scene.recorder.web_url
     assert url == get_server().web_url and url.startswith(f"http://{LOOPBACK}:")
-    assert f"src='{url}'" in scene.widget.children[1].value
+    page = url.replace("/static/", "/lfd/")  # the tutor's page: meshcat's, with the stamp
+    assert f"src='{page}'" in scene.widget.children[1].value
+    with urllib.request.urlopen(page, timeout=10) as reply:
+        assert b"lfd-stamp" in reply.read()
     served = visualizer().static_html()  # the server's own snapshot of its scene tree
     paths = {c.get("path") for c in _server_commands(served)}
     assert "/meshcat/lfd/plants/0/ball" in paths and "/meshcat/lfd/table" in paths

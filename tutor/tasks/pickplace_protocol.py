@@ -9,6 +9,14 @@ SF  selected: the teacher chooses when and which plants the robot tries.
 The clock the paper's teachers lived by: a demonstration costs its own duration, every
 realisation the robot performs costs 25 s (a real arm is slow), and a teaching run is
 capped at 15 minutes. Each trainee does three runs.
+
+The cap, as the paper ran it: a demonstration that cannot finish before 15:00, with the
+robot's attempts its condition then shows (RF 1, BF 5, x 25 s), is not started, and the
+run ends with the last complete demonstration. :meth:`PickPlaceRun.demonstrate` refuses
+such a demo with a :class:`RunOverError` that says how much time is left (a refusal
+changes nothing); the run is over once not even the shortest demonstration fits
+(:data:`SHORTEST_DEMO_SECONDS` plus those attempts), and :meth:`PickPlaceRun.finish`
+then records it as stopped "time".
 """
 
 from __future__ import annotations
@@ -18,13 +26,25 @@ import numpy as np
 from ..errors import InvalidParameterError
 from ..framework import RunOverError, TeachingRun
 from ..framework.record import utc_now
+from .kinesthetic import CARRY_SECONDS, PAUSE_SECONDS, REACH_SECONDS
 from .pickplace import PickPlaceTask
 
-__all__ = ["CONDITIONS", "PickPlaceRun", "RunOverError", "RUNS"]
+__all__ = ["CONDITIONS", "PickPlaceRun", "RunOverError", "RUNS", "SHORTEST_DEMO_SECONDS"]
 
 CONDITIONS = {"NF": "none", "RF": "replay", "BF": "batch", "SF": "selected"}
 #: each trainee teaches three runs in their condition
 RUNS = 3
+#: The shortest demonstration a person gives (s): the simulated hand's fastest pace
+#: (0.85 of the average, less 5 %) over the reach, the transport and both button
+#: presses, rounded down. Less time than this (plus the condition's attempts) left
+#: ends the run.
+SHORTEST_DEMO_SECONDS = float(int(0.8 * (REACH_SECONDS + CARRY_SECONDS + 2 * PAUSE_SECONDS)))
+
+
+def clock(seconds: float) -> str:
+    """``seconds`` as m:ss (e.g. 65 -> "1:05")."""
+    whole = max(0, int(seconds))
+    return f"{whole // 60}:{whole % 60:02d}"
 
 
 class PickPlaceRun(TeachingRun):
@@ -87,31 +107,96 @@ class PickPlaceRun(TeachingRun):
         return max(0.0, self.cap - self.elapsed)
 
     @property
+    def feedback_seconds(self) -> float:
+        """Seconds of the robot's attempts the condition shows after each demo (RF 25, BF
+        125, NF and SF 0: SF's tests are asked for and paid for one by one)."""
+        shown = {"replay": 1, "batch": len(self.batch())}.get(self.feedback, 0)
+        return self.realisation_seconds * shown
+
+    def demo_cost(self, seconds: float) -> float:
+        """Clock time a demonstration of ``seconds`` takes with the attempts shown after it."""
+        return float(seconds) + self.feedback_seconds
+
+    def fits(self, seconds: float) -> bool:
+        """A demonstration of ``seconds`` (and the attempts shown after it) ends by the cap."""
+        return self.demo_cost(seconds) <= self.remaining + 1e-9
+
+    @property
+    def out_of_time(self) -> bool:
+        """Not even the shortest demonstration fits in the time left."""
+        return not self.fits(SHORTEST_DEMO_SECONDS)
+
+    @property
     def finished(self) -> bool:
-        return super().finished or self.remaining <= 0
+        return super().finished or self.out_of_time
 
     def clock_text(self) -> str:
         used, cap = min(self.elapsed, self.cap), self.cap
-        return f"{int(used // 60)}:{int(used % 60):02d} of {int(cap // 60)}:00 used"
+        return f"{clock(used)} of {int(cap // 60)}:00 used"
 
     def _check_open(self) -> None:
+        if self.out_of_time and not super().finished:
+            raise RunOverError(
+                f"This run is over: only {clock(self.remaining)} of the "
+                f"{self.cap / 60:g} minutes is left, too little for another demonstration"
+                f"{self._with_feedback(SHORTEST_DEMO_SECONDS)}. Your last complete "
+                "demonstration counts: press Finish run, then start the next run"
+            )
         if self.finished:
             raise RunOverError(
-                "this run is over (15 minutes used or finished): start the next run to go on"
+                f"this run is over ({self.cap / 60:g} minutes used or finished): start the "
+                "next run to go on"
             )
+
+    def _with_feedback(self, seconds: float) -> str:
+        """The words for a demo's cost in messages, e.g. ' (about 9 s) and the robot's 5
+        attempts after it (125 s)'."""
+        n = int(round(self.feedback_seconds / self.realisation_seconds))
+        attempts = "attempt" if n == 1 else f"{n} attempts"
+        after = f" and the robot's {attempts} after it ({self.feedback_seconds:.0f} s)"
+        return f" (about {seconds:.0f} s){after if n else ''}"
+
+    def add_demo(self, raw, *, seconds: float | None = None, **options):
+        """Add one demonstration (see :meth:`TeachingRun.add_demo`) if it fits the clock.
+
+        Raises
+        ------
+        RunOverError
+            It would not end, with the attempts shown after it, by the 15-minute cap
+            (nothing changed); or the run is over.
+        """
+        self._check_open()
+        if seconds is not None and not self.fits(seconds):
+            raise RunOverError(
+                f"Only {clock(self.remaining)} of the {self.cap / 60:g} minutes is left: not "
+                f"enough for this demonstration{self._with_feedback(seconds)}, so it was not "
+                "started. A shorter one may fit; or press Finish run to end the run with "
+                "your last complete demonstration"
+            )
+        return super().add_demo(raw, seconds=seconds, **options)
 
     # ---------------------------------------------------------------- teaching
 
     def demonstrate(self, plant: int, raw=None, mistake=None, rng=None, chosen_by: str = ""):
-        """Give one demonstration to ``plant`` (recorded, or generated kinesthetically)."""
+        """Give one demonstration to ``plant`` (recorded, or generated kinesthetically).
+
+        Raises
+        ------
+        RunOverError
+            The demonstration (with the attempts the condition shows after it) would not
+            end by the cap: it is not started (nothing changes). When not even the
+            shortest one fits, the run is over (:attr:`finished`; :meth:`finish` then
+            records it as stopped "time") and ends with its last complete demo.
+        """
         self._check_open()
         plant = self._check_plant(plant)
         if raw is None:
             raw = self.task.demonstrate(plant, rng, mistake=mistake)
+        seconds = self.task.duration(raw)
         return self.add_demo(
             raw,
             condition=self.task.conditions[plant],
-            seconds=self.task.duration(raw),
+            seconds=seconds,
             chosen_by=chosen_by,
             mistake=mistake or "",
         )
@@ -140,7 +225,7 @@ class PickPlaceRun(TeachingRun):
     def finish(self, stopped: str | None = None) -> None:
         """End the run ("time" when the 15 minutes are used up, else "finish")."""
         if stopped is None:
-            stopped = "time" if self.remaining <= 0 else "finish"
+            stopped = "time" if self.out_of_time else "finish"
         super().finish(stopped)
 
     def undo(self):

@@ -110,11 +110,11 @@ class PickPlaceTeacher:
             if run.finished:
                 break
             slip = model.slips()
+            raw = self.demonstration(plant, rng, slip)
+            if not run.fits(self.task.duration(raw)):
+                break  # as the paper ran it: a demo that cannot end by 15:00 is not started
             record = run.demonstrate(
-                plant,
-                raw=self.demonstration(plant, rng, slip),
-                chosen_by=why,
-                mistake="wrong_plant" if slip else None,
+                plant, raw=raw, chosen_by=why, mistake="wrong_plant" if slip else None
             )
             model.belief.demonstrate(plant)
             model.belief.observe(record.shown, record.passed[record.shown])

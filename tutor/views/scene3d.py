@@ -63,6 +63,7 @@ status : (100,) of str
 
 from __future__ import annotations
 
+import hashlib
 import html
 import threading
 from dataclasses import dataclass
@@ -72,6 +73,14 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from .meshcat_recorder import SceneRecorder, delete_command, empty_animation, frame_commands
+from .scene_animation import (
+    Track,
+    key_samples,
+    moving,
+    pack_animation,
+    step_track,
+    transform_tracks,
+)
 from .scene_meshes import (
     HAND_CLOSED,
     HAND_OPEN,
@@ -81,7 +90,7 @@ from .scene_meshes import (
     plant_ball,
     robot_meshes,
 )
-from .scene_page import choose_mode, page, scene_data, viewer_widget_class
+from .scene_page import choose_mode, live_page_url, page, scene_data, viewer_widget_class
 from .style import DEMO, FAIL, PASS
 
 __all__ = [
@@ -103,6 +112,8 @@ STATUS_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
 #: whole scene is shifted to put its middle there.
 CAMERA_POSITION = (0.75, -0.7, 0.62)
 DYNAMIC = "/meshcat/lfd"  # everything one Scene3D draws itself (the robot is shared)
+#: The path of the live viewer's "update applied" stamp (its page handles it; not drawn).
+STAMP = "/lfd-stamp"
 
 
 @dataclass(frozen=True)
@@ -112,15 +123,18 @@ class AnimationInfo:
     Attributes
     ----------
     frames : int
-        Samples of the path (one animation key per sample).
+        Samples of the path.
     fps : float
-        Keys per second.
+        Samples per second (the path is played at this rate).
     duration : float
         Seconds from the first key to the last.
     label : str
         The caption shown with it.
     reached : bool
         The arm reached every sample of the path (inverse kinematics converged).
+    keys : int
+        Animation keys sent to the viewer per moving node (it interpolates between
+        them; see :mod:`tutor.views.scene_animation`).
     """
 
     frames: int
@@ -128,6 +142,7 @@ class AnimationInfo:
     duration: float
     label: str
     reached: bool
+    keys: int = 0
 
 
 # --------------------------------------------------------------------------- the scene
@@ -201,6 +216,9 @@ class Scene3D:
         self._view = None
         self._pending = None  # commands not yet sent to the notebook viewer
         self._shown_key = None
+        self._trails: dict[str, list[bytes]] = {}  # what each trail group shows (digests)
+        self._stamp = 0  # updates sent to the live viewer (it reports the last applied)
+        self.replay_button = None
         self._claim_live(fresh=True)  # what follows streams to the live viewer as drawn
         self._draw_static_scene()
         self.set_status(np.full(len(task.conditions), "unknown", dtype=object))
@@ -286,33 +304,46 @@ class Scene3D:
         self._status = s.copy()
 
     def draw_trails(self, name: str, paths, colour: str) -> None:
-        """Draw ``paths`` (k, T, >= 3) as lines under ``lfd/trails/name`` (replacing them)."""
+        """Draw ``paths`` (k, T, >= 3) as lines under ``lfd/trails/name`` (replacing them).
+
+        Only what changed is sent: a line already drawn with the same points and colour
+        stays, new ones are added and lines no longer there are deleted.
+        """
         import meshcat.geometry as mg
 
         node = self.vis[f"lfd/trails/{name}"]
-        node.delete()
-        for j, path in enumerate(paths):
-            P = self._check_path(path, columns=3)[:, :3]
-            node[str(j)].set_object(
-                mg.Line(
-                    mg.PointsGeometry(P.T.astype(np.float32)),
-                    mg.LineBasicMaterial(color=hex_colour(colour), linewidth=2),
+        points = [self._check_path(p, columns=3)[:, :3].astype(np.float32) for p in paths]
+        digests = [
+            hashlib.blake2b(P.tobytes() + colour.encode(), digest_size=16).digest() for P in points
+        ]
+        old = self._trails.get(name, [])
+        if not digests and old:
+            node.delete()
+        for j, (P, d) in enumerate(zip(points, digests, strict=True)):
+            if j >= len(old) or old[j] != d:
+                node[str(j)].set_object(
+                    mg.Line(
+                        mg.PointsGeometry(P.T),
+                        mg.LineBasicMaterial(color=hex_colour(colour), linewidth=2),
+                    )
                 )
-            )
+        if digests:
+            for j in range(len(digests), len(old)):
+                node[str(j)].delete()
+        self._trails[name] = digests
 
     def animate(self, path, label: str = "", colour: str | None = None) -> AnimationInfo:
         """Animate the arm along ``path`` (T, 4) over :attr:`seconds` and draw its trail.
 
         The tool path goes through :meth:`tutor.robot.Arm.follow` (inverse kinematics
-        from the start configuration); the fingers follow the hand column.
+        from the start configuration); the fingers follow the hand column. It plays once
+        by itself; :meth:`replay` plays it again. The viewer gets a few keys a second of
+        the links that move (:mod:`tutor.views.scene_animation`), not every sample.
 
         Returns
         -------
         AnimationInfo
         """
-        import meshcat.animation as ma
-        import meshcat.transformations as tf
-
         P = self._check_path(path, columns=4)
         T = len(P)
         if T < 2:
@@ -321,34 +352,53 @@ class Scene3D:
         track = arm.follow(
             P[:, :3], gripper=P[:, 3], q0=self.scene.start_configuration, check_collisions=False
         )
-        fps = T / self.seconds  # 200 samples over 10 s: 20 keys per second
-        anim = ma.Animation(default_framerate=fps)
-        closed = P[:, 3] >= 0.5
-        tiny, one = [1e-3] * 3, [1.0] * 3
+        fps = T / self.seconds  # 200 samples over 10 s: 20 samples per second
+        every = np.arange(T) / fps
+        keys = key_samples(T, every[-1])
+        times = every[keys]
+        clips: dict[str, list[Track]] = {}
         if self._robot is not None:
-            placements = self._placements(track.qs)
-        for t in range(T):
-            with anim.at_frame(self.vis, t) as frame:
-                if self._robot is not None:
-                    for g, name in enumerate(self._robot.node_names):
-                        frame[name].set_transform(placements[t, g])
-                p, _ = arm.fk(track.qs[t])
-                frame["lfd/hand"].set_transform(tf.translation_matrix(p))
-                # a scale track: a transform track would animate position and rotation only
-                frame["lfd/hand/open"].set_property("scale", "vector3", tiny if closed[t] else one)
-                frame["lfd/hand/closed"].set_property(
-                    "scale", "vector3", one if closed[t] else tiny
-                )
+            placements = self._placements(track.qs[keys])  # (k, G, 4, 4)
+            for g in np.flatnonzero(moving(placements)):
+                name = self._robot.node_names[g]
+                clips[self._node_path(name)] = transform_tracks(times, placements[:, g])
+        hand = np.array([arm.fk(q)[0] for q in track.qs[keys]])
+        clips[self._node_path("lfd/hand")] = [Track(".position", "vector3", times, hand)]
+        closed = (P[:, 3] >= 0.5)[:, None]
+        tiny, one = np.full(3, 1e-3), np.ones(3)
+        # a scale track: one key per switch of the hand (open <-> closed)
+        clips[self._node_path("lfd/hand/open")] = [
+            step_track(".scale", "vector3", every, np.where(closed, tiny, one))
+        ]
+        clips[self._node_path("lfd/hand/closed")] = [
+            step_track(".scale", "vector3", every, np.where(closed, one, tiny))
+        ]
         self.draw_trails("animated", [P], colour or "#222222")
-        self.vis.set_animation(anim, play=True, repetitions=1)
-        info = AnimationInfo(T, fps, (T - 1) / fps, label, bool(track.converged.all()))
+        self.recorder.send_packed("set_animation", "", pack_animation(clips, play=True))
+        info = AnimationInfo(
+            T, fps, (T - 1) / fps, label, bool(track.converged.all()), keys=len(keys)
+        )
         self.animation = info
         return info
+
+    def _node_path(self, name: str) -> str:
+        """The full Meshcat path of ``name`` under this scene's root ("/meshcat/...")."""
+        return self.vis[name].path.lower()
+
+    def replay(self) -> bool:
+        """Play the animated trajectory again from its start; False when there is none."""
+        item = self.recorder.tree.animation
+        if item is None:
+            return False
+        self.recorder.send_packed(*item)
+        self.refresh()
+        self._stamp_live()
+        return True
 
     def clear_animation(self) -> None:
         """Stop any animation and put the robot back at the start configuration."""
         self.recorder.send_packed("set_animation", "", empty_animation())
-        self.vis["lfd/trails/animated"].delete()
+        self.draw_trails("animated", [], "#222222")
         self.show_configuration(self.scene.start_configuration)
         p, _ = self._get_arm().fk(self.scene.start_configuration)
         import meshcat.transformations as tf
@@ -424,6 +474,24 @@ class Scene3D:
         self._shown_key = key
         self._claim_live()
         self.refresh()
+        self._stamp_live()
+
+    def _stamp_live(self) -> None:
+        """Tell the live viewer that an update is complete: its page (the tutor's, see
+        :mod:`tutor.views.meshcat_server`) records the number and the time it applied
+        it (``document.body.dataset.updates`` and ``.appliedAt``)."""
+        if self.recorder.live is None:
+            return
+        import umsgpack
+
+        self._stamp += 1
+        command = {
+            "type": "set_property",
+            "path": STAMP,
+            "property": "update",
+            "value": self._stamp,
+        }
+        self.recorder.forward("set_property", STAMP, umsgpack.packb(command))
 
     @staticmethod
     def _pick_plant(run, shown):
@@ -520,7 +588,7 @@ class Scene3D:
         import ipywidgets as w
 
         if self.mode == "live":
-            url = html.escape(self.recorder.web_url or "")
+            url = html.escape(live_page_url(self.recorder.web_url or ""))
             style = f"width:100%;height:{self.height}px;border:1px solid #ccc"
             return w.HTML(f"<iframe src='{url}' style='{style}'></iframe>")
         view = viewer_widget_class()(height=self.height, page=page("3-D view", "", "", ""))
@@ -548,11 +616,11 @@ class Scene3D:
         if self.animation is not None:
             parts.append(f"<div><b>Animated:</b> {html.escape(self.animation.label)}</div>")
         how = (
-            "Drag to turn, scroll to zoom, right-drag to move. To replay: <i>Open Controls "
-            "▸ Animations ▸ default ▸ play</i> (top right of the view)."
+            "The attempt plays once by itself after each step; <b>Replay</b> plays it again. "
+            "Drag to turn, scroll to zoom, right-drag to move."
         )
         if self.mode == "live" and self.recorder.web_url:
-            url = html.escape(self.recorder.web_url)
+            url = html.escape(live_page_url(self.recorder.web_url))
             how += f" <a href='{url}' target='_blank'>Open in its own tab</a>."
         parts.append(f"<div style='font-size:12px;color:#555'>{how}</div>")
         if self.message:
@@ -566,8 +634,17 @@ class Scene3D:
             import ipywidgets as w
 
             self._caption = w.HTML()
+            self.replay_button = w.Button(
+                description="Replay",
+                icon="play",
+                tooltip="Play the robot's motion shown here again",
+                layout=w.Layout(width="100px", flex="0 0 auto"),
+            )
+            self.replay_button.add_class("lfd-replay")
+            self.replay_button.on_click(lambda _: self.replay())
             self._view = self._make_view()
-            self._widget = w.VBox([self._caption, self._view])
+            self._header = w.HBox([self.replay_button, self._caption])
+            self._widget = w.VBox([self._header, self._view])
             self._widget.add_class("lfd-scene3d")
             self.refresh()
         return self._widget
@@ -577,11 +654,12 @@ class Scene3D:
         if self._widget is None:
             return
         self._caption.value = self._caption_html()
+        self.replay_button.disabled = self.animation is None
         if self.mode == "static" and isinstance(self._view, viewer_widget_class()):
             self._flush()
         elif self.mode == "static":  # the live viewer died: switch to the notebook viewer
             self._view = self._make_view()
-            self._widget.children = (self._caption, self._view)
+            self._widget.children = (self._header, self._view)
 
     def _ipython_display_(self):
         from IPython.display import display

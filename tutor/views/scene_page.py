@@ -26,7 +26,19 @@ from urllib.parse import urlparse
 from ..errors import InvalidParameterError
 from ..runtime import headless
 
-__all__ = ["choose_mode", "page", "scene_data", "static_text", "viewer_widget_class"]
+__all__ = [
+    "LIVE_PAGE",
+    "choose_mode",
+    "live_page_url",
+    "page",
+    "scene_data",
+    "static_text",
+    "viewer_widget_class",
+]
+
+#: Where the tutor's Meshcat server serves its own viewer page (``scene3d_live.html``:
+#: meshcat's viewer, plus the "update applied" stamp), next to meshcat's ``/static/``.
+LIVE_PAGE = "/lfd/"
 
 _SLOT = re.compile(r"\{\{(\w+)\}\}")
 
@@ -47,6 +59,15 @@ def choose_mode(mode: str = "auto") -> str:
     if voila and urlparse(voila).hostname not in ("127.0.0.1", "localhost", "::1"):
         remote = True
     return "static" if headless() or remote else "live"
+
+
+def live_page_url(web_url: str) -> str:
+    """The tutor's live viewer page on the server whose meshcat page is ``web_url``
+    ("http://127.0.0.1:7000/static/" -> "http://127.0.0.1:7000/lfd/"); "" stays ""."""
+    if not web_url:
+        return ""
+    parsed = urlparse(web_url)
+    return parsed._replace(path=LIVE_PAGE, query="", fragment="").geturl()
 
 
 @lru_cache(maxsize=8)

@@ -1,6 +1,7 @@
 // The notebook's 3-D viewer (anywidget ESM of tutor/views/scene_page.py): meshcat's
 // page in an iframe, fed over the widget's comm. On (re)load it says hello; the kernel
-// answers with the whole scene for this view id, then sends only what changed.
+// answers with the whole scene for this view id, then sends only what changed. After
+// each batch it records data-updates, data-applied-at and data-painted-at on the view.
 function render({ model, el }) {
   const id = Math.random().toString(36).slice(2);
   const frame = document.createElement("iframe");
@@ -18,8 +19,17 @@ function render({ model, el }) {
         : new Uint8Array(b.buffer, b.byteOffset, b.byteLength).slice();
       chain = chain.then(() => frame.contentWindow.lfdApply(bytes));
     }
+    // what the browser tests read: how many batches were applied, and when (ms since
+    // the epoch, comparable with the page's clock); paintedAt once a frame was drawn
     chain = chain
-      .then(() => { el.dataset.updates = String(Number(el.dataset.updates) + 1); })
+      .then(() => {
+        el.dataset.appliedAt = String(Date.now());
+        el.dataset.updates = String(Number(el.dataset.updates) + 1);
+        const win = frame.contentWindow;
+        win.requestAnimationFrame(() => win.requestAnimationFrame(() => {
+          el.dataset.paintedAt = String(Date.now());
+        }));
+      })
       .catch((err) => { el.dataset.error = String(err); });
   };
   const onMsg = (msg, buffers) => {
