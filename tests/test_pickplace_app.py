@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -202,3 +204,16 @@ def test_tray_map_is_laid_out_as_the_3d_camera_sees_it(task):
     from tutor.views.scene3d import CAMERA_POSITION
 
     assert CAMERA_POSITION[0] > 0 and CAMERA_POSITION[1] < 0
+
+
+def test_the_run_ends_with_the_last_complete_demo_at_the_cap(task, tmp_path):
+    app = PickPlaceTutor("BF", task=task, seed=0, session_file=tmp_path / "bf.json")
+    app.demonstrate(44)
+    app.run.spend(app.run.remaining - 20)  # 20 s left: no demo and its 5 attempts fit
+    app.demonstrate(0)
+    assert app.run.n_demos == 1  # the demo that could not end by 15:00 was not started
+    assert app.run.attempt.finished and app.run.attempt.stopped == "time"
+    assert "15 minutes are used up" in app.message and "Run over" in app.panel.value
+    assert "15:00" in app.clock.value or "of 15:00" in app.clock.value
+    saved = json.loads((tmp_path / "bf.json").read_text())
+    assert saved["attempts"][-1]["stopped"] == "time"

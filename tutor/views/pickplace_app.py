@@ -217,15 +217,26 @@ class PickPlaceTutor(TutorApp):
             return
         plant = self.selected if plant is None else plant
         mistake = MISTAKES[self.mistake.value] if mistake is None else mistake
+        finished = self.run.attempt.finished
         try:
             self.run.demonstrate(plant, mistake=mistake, rng=self.rng, chosen_by="guided")
             self.message = ""
         except TutorError as exc:
             self.message = str(exc)
-            return
-        finally:
-            self.mistake.value = "no mistake"
-        self._autosave()
+        self.mistake.value = "no mistake"
+        self._close_if_out_of_time()
+        if self.run.attempt.finished != finished or self.message == "":
+            self._autosave()
+
+    def _close_if_out_of_time(self) -> None:
+        """The paper's cap: when not even the shortest demonstration fits in the time
+        left, the run ends with the last complete demo (recorded as stopped "time")."""
+        if self.run.out_of_time and not self.run.attempt.finished:
+            self.run.finish("time")
+            self.message = (
+                f"{self.message} The 15 minutes are used up: the run ends with your last "
+                "complete demonstration."
+            ).strip()
 
     @guarded
     def test(self, plants=None) -> None:
