@@ -159,7 +159,7 @@ class MazeTutor(TutorApp):
             self.pad.show(s.demos, rule_circle=rule, note=note)
         else:
             shown = np.arange(len(rec.passed)) if self.finished else rec.shown
-            self.pad.show(s.demos, s.realisations, rec.passed, shown, rule)
+            self.pad.show(s.demos, s.realisations, rec.passed, shown, rule, reasons=rec.reasons)
         self.pad.enabled = not self.finished and not self.read_only
         for name in ("Undo", "Reset", "Finish", "Save"):
             self.buttons[name].disabled = self.read_only

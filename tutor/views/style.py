@@ -41,6 +41,7 @@ __all__ = [
     "OBSTACLE",
     "START_ZONE",
     "TARGET",
+    "RULE",
     "new_axes",
 ]
 
@@ -80,6 +81,7 @@ FAIL_DASH = (0, (4, 2.5))  #: line style of a failing realisation (dashed)
 OBSTACLE = "#4d4d4d"  #: obstacle blocks (dark grey)
 START_ZONE = "#d9e6f2"  #: start zone I (light blue-grey)
 TARGET = "#7570b3"  #: the target beta (purple: neither pass nor fail)
+RULE = "#e69f00"  #: VR's rule circle (orange, dashed): where the next demo should start
 
 
 def new_axes(ax=None, figsize=(5.0, 4.0)):
