@@ -17,6 +17,7 @@ ended outside the target), and the causes are counted under the picture.
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import anywidget
@@ -118,6 +119,8 @@ class Sketchpad(anywidget.AnyWidget):
     stroke = traitlets.List().tag(sync=True)
     stroke_count = traitlets.Int(0).tag(sync=True)
     render_id = traitlets.Int(0).tag(sync=True)
+    #: kernel time (ms) from the last stroke's arrival to the picture answering it
+    python_ms = traitlets.Float(0.0).tag(sync=True)
 
     def __init__(self, maze=None, *, layout=None, **kwargs):
         if isinstance(layout, dict):  # the old keyword for the maze geometry
@@ -141,6 +144,12 @@ class Sketchpad(anywidget.AnyWidget):
         }
         super().__init__(maze=maze, palette=palette, **kwargs)
         self._geometry = _MazeLayout(maze)
+        self._stroke_at = None
+        # registered first, so it runs before the tutor's own observer of the stroke
+        self.observe(self._stroke_arrived, names="stroke_count")
+
+    def _stroke_arrived(self, change) -> None:
+        self._stroke_at = time.perf_counter()
 
     # ------------------------------------------------------------ read back
 
@@ -206,6 +215,9 @@ class Sketchpad(anywidget.AnyWidget):
             self.summary = summary
             self.rule_circle = rule_circle
             self.note = note
+            if self._stroke_at is not None:
+                self.python_ms = round(1000 * (time.perf_counter() - self._stroke_at), 1)
+                self._stroke_at = None
             self.render_id = self.render_id + 1
 
     def draw(self, demo) -> None:

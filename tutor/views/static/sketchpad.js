@@ -184,7 +184,6 @@ function render({ model, el }) {
     c.globalAlpha = alpha;
     c.strokeStyle = color;
     c.lineWidth = width;
-    c.lineJoin = "round";
     c.setLineDash(dash || []);
     linesPath(c, map, list);
     c.stroke();
@@ -197,17 +196,27 @@ function render({ model, el }) {
     c.fillRect(x0, y1, (b.x[1] - b.x[0]) * g.scale, (b.y[1] - b.y[0]) * g.scale);
   }
 
-  function cross(c, px, py, r, color) {
+  function marks(c, map, list, cross, r, color, width) {
+    // all the marks of one kind in one path: × (cross) or ○, white halo under colour
+    if (!list.length) return;
     c.save();
-    c.lineCap = "round";
-    for (const [w, col] of [[4, "#ffffff"], [2, color]]) {
-      c.strokeStyle = col;
-      c.lineWidth = w;
-      c.beginPath();
-      c.moveTo(px - r, py - r); c.lineTo(px + r, py + r);
-      c.moveTo(px - r, py + r); c.lineTo(px + r, py - r);
-      c.stroke();
-    }
+    c.beginPath();
+    list.forEach(([x, y]) => {
+      const [px, py] = map(x, y);
+      if (cross) {
+        c.moveTo(px - r, py - r); c.lineTo(px + r, py + r);
+        c.moveTo(px - r, py + r); c.lineTo(px + r, py - r);
+      } else {
+        c.moveTo(px + r, py);
+        c.arc(px, py, r, 0, 2 * Math.PI);
+      }
+    });
+    c.strokeStyle = "#ffffff";
+    c.lineWidth = width + 2;
+    c.stroke();
+    c.strokeStyle = color;
+    c.lineWidth = width;
+    c.stroke();
     c.restore();
   }
 
@@ -231,7 +240,11 @@ function render({ model, el }) {
     model.get("shown").forEach((i) => {
       if (i < reals.length) (passed[i] ? pass : fail).push(reals[i]);
     });
-    return { pass, fail, demos: paths(model.get("demo_xy"), samples), marks: model.get("marks") };
+    const all = model.get("marks");
+    return {
+      pass, fail, demos: paths(model.get("demo_xy"), samples),
+      crosses: all.filter((m) => m[2] !== 4), rings: all.filter((m) => m[2] === 4),
+    };
   }
 
   function drawBase() {
@@ -267,10 +280,8 @@ function render({ model, el }) {
     const fb = feedback();
     strokeLines(c, map, fb.pass, P.pass, 1.2, 0.85, []);
     strokeLines(c, map, fb.fail, P.fail, 1.2, 0.9, [5, 3]);
-    fb.marks.forEach(([x, y, code]) => {
-      const [px, py] = toPx(g, x, y);
-      if (code === 4) ring(c, px, py, 2.5, P.fail, 1.2); else cross(c, px, py, 3.5, P.fail);
-    });
+    marks(c, map, fb.crosses, true, 3.5, P.fail, 2);
+    marks(c, map, fb.rings, false, 2.5, P.fail, 1.2);
 
     const rule = model.get("rule_circle");
     if (rule && rule.center) {
@@ -344,20 +355,27 @@ function render({ model, el }) {
     c.beginPath();
     c.arc(cx, cy, r, 0, 2 * Math.PI);
     c.fill();
-    strokeLines(c, map, fb.pass, P.pass, 1.5, 0.85, []);
-    strokeLines(c, map, fb.fail, P.fail, 1.5, 0.9, [5, 3]);
-    fb.demos.forEach((pts) => strokeLines(c, map, [pts], P.demo, 2.5, 1.0, []));
+    // only the part of each path near the target: from its last sample outside the region
+    const far = 1.5 * INSET_HALF;
+    const tail = (pts) => {
+      let k = pts.length - 1;
+      while (k > 0 && Math.abs(pts[k][0] - t.center[0]) < far &&
+        Math.abs(pts[k][1] - t.center[1]) < far) k--;
+      return pts.slice(Math.max(0, k - 1));
+    };
+    strokeLines(c, map, fb.pass.map(tail), P.pass, 1.5, 0.85, []);
+    strokeLines(c, map, fb.fail.map(tail), P.fail, 1.5, 0.9, [5, 3]);
+    fb.demos.forEach((pts) => strokeLines(c, map, [tail(pts)], P.demo, 2.5, 1.0, []));
+    c.fillStyle = P.pass;
+    c.beginPath();
     fb.pass.forEach((pts) => {
       const [px, py] = map(...pts[pts.length - 1]);
-      c.fillStyle = P.pass;
-      c.beginPath();
+      c.moveTo(px + 2.5, py);
       c.arc(px, py, 2.5, 0, 2 * Math.PI);
-      c.fill();
     });
-    fb.marks.forEach(([x, y, code]) => {
-      const [px, py] = map(x, y);
-      if (code === 4) ring(c, px, py, 3.5, P.fail, 1.5); else cross(c, px, py, 4, P.fail);
-    });
+    c.fill();
+    marks(c, map, fb.crosses, true, 4, P.fail, 2);
+    marks(c, map, fb.rings, false, 3.5, P.fail, 1.5);
     c.restore();
     c.strokeStyle = "#000";
     c.lineWidth = 1.5;
@@ -419,8 +437,8 @@ function render({ model, el }) {
     scheduled = false;
     drawBase();
     paint();
-    const n = model.get("demo_xy") ? Math.floor(floats(model.get("demo_xy")).length /
-      (2 * model.get("samples"))) : 0;
+    const demoBytes = model.get("demo_xy");
+    const n = demoBytes ? Math.floor(demoBytes.byteLength / (8 * model.get("samples"))) : 0;
     summary.textContent = model.get("summary");
     note.textContent = model.get("note");
     canvas.setAttribute("aria-label", model.get("help_text"));
@@ -597,8 +615,14 @@ function render({ model, el }) {
 
   model.on("change:render_id", () => {
     // Python's answer: draw it now, in this task, so the latency counts no extra frame
+    const t0 = performance.now();
+    if (strokeReleasedAt !== null) {
+      root.dataset.answerMs = (t0 - strokeReleasedAt).toFixed(1);
+      root.dataset.pythonMs = String(model.get("python_ms"));
+    }
     scheduled = true;
     redraw();
+    root.dataset.drawMs = (performance.now() - t0).toFixed(1);
   });
   ["maze", "palette", "width_px", "enabled", "help_text"].forEach((name) =>
     model.on(`change:${name}`, schedule));
