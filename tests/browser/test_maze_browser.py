@@ -43,6 +43,9 @@ STARTS = [
 ]
 
 
+#: the sketchpad's map (the canvas one draws on; the zoomed target view is another)
+MAP = "canvas.lfd-pad-map"
+
 # generous: on a busy 2-core machine starting a kernel and running the notebook is slow
 WIDGET_TIMEOUT_MS = 300_000
 
@@ -60,7 +63,7 @@ def sketchpad_for(page, condition: str):
 
 def draw_stroke(page, pad, start, n_points: int = 40) -> None:
     """Press in the start zone, move through the maze to the target, release."""
-    box = pad.locator("canvas").bounding_box()
+    box = pad.locator(MAP).bounding_box()
     ws = LAYOUT.workspace
     scale = box["width"] / (ws.x1 - ws.x0)
     path = LAYOUT.reference_path(start, n_samples=n_points)[:, 1:]
@@ -78,7 +81,7 @@ def wait_for_demos(pad, n: int) -> None:
 
 def colour_counts(pad) -> dict:
     """Pixels of the pass (green) and fail (dark red) colours on the canvas."""
-    return pad.locator("canvas").evaluate(
+    return pad.locator(MAP).evaluate(
         """(c) => {
           const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
           const near = (i, r, g, b) =>
@@ -165,7 +168,7 @@ def keys_to(page, cursor, goal):
 
 def draw_with_keyboard(page, tutor, pad, artifacts, name: str) -> None:
     """Reach the sketchpad with Shift+Tab from its Undo button, then draw with keys only."""
-    canvas = pad.locator("canvas")
+    canvas = pad.locator(MAP)
     assert canvas.get_attribute("tabindex") == "0"
     assert canvas.get_attribute("role") == "application"
     label = canvas.get_attribute("aria-label")
@@ -281,7 +284,7 @@ def test_jupyterlab_dead_kernel_says_so(page, jupyterlab, artifacts):
     assert "run the cell again" in alert.inner_text()
     assert n_demos(pad) == before
     # and a key press says the same, rather than drawing on
-    pad.locator("canvas").focus()
+    pad.locator(MAP).focus()
     page.keyboard.press("Space")
     assert "no longer connected" in alert.inner_text()
 

@@ -2,9 +2,9 @@
 //
 // Draws the maze, the shown realisations (pass: solid, fail: dashed, with a mark where
 // each failure happened), the demos (numbered), an optional rule circle, the target to
-// scale and a zoomed inset of the target; records a stroke with the pointer or the
-// keyboard and sends it to Python once, on release / Enter. Coordinates on the Python
-// side are metres; time is seconds. Colours come from Python (tutor.views.style).
+// scale and, under the map, a zoomed view of the target area; records a stroke with the
+// pointer or the keyboard and sends it to Python once, on release / Enter. Coordinates
+// on the Python side are metres; time is seconds. Colours come from Python (tutor.views.style).
 //
 // Keyboard: the canvas is focusable (Tab); arrow keys move a cursor (Shift: 1 cm steps),
 // Space places a waypoint, Enter places the last one and finishes the demonstration,
@@ -17,14 +17,17 @@ const STEP = 0.002;        // metres per arrow key press
 const BIG_STEP = 0.01;     // with Shift
 const KEY_SPEED = 0.1;     // metres per second of a keyboard stroke
 const KEY_SPACING = 0.001; // metres between the samples of a keyboard stroke
-const INSET_PX = 120;      // side of the target inset
+const INSET_PX = 110;      // side of the zoomed target view (px)
 const INSET_HALF = 0.008;  // half the side of the region it shows (metres)
 
 const CSS = `
 .lfd-sketchpad { font: 12px sans-serif; color: #222; }
-.lfd-sketchpad canvas { display: block; touch-action: none; cursor: crosshair; }
-.lfd-sketchpad canvas:focus { outline: none; }
-.lfd-sketchpad canvas:focus-visible { outline: 3px solid #013ad1; outline-offset: 2px; }
+.lfd-sketchpad .lfd-pad-map { display: block; touch-action: none; cursor: crosshair; }
+.lfd-sketchpad .lfd-pad-map:focus { outline: none; }
+.lfd-sketchpad .lfd-pad-map:focus-visible { outline: 3px solid #013ad1; outline-offset: 2px; }
+.lfd-sketchpad .lfd-pad-row { display: flex; gap: 8px; align-items: flex-start;
+  margin: 4px 0 0 0; max-width: 360px; }
+.lfd-sketchpad .lfd-pad-zoom { flex: none; }
 .lfd-sketchpad .lfd-pad-help { color: #444; margin: 4px 0 0 0; max-width: 360px; }
 .lfd-sketchpad .lfd-pad-summary { margin: 4px 0 0 0; max-width: 360px; font-weight: 600; }
 .lfd-sketchpad .lfd-pad-note { margin: 4px 0 0 0; max-width: 360px; font-style: italic; }
@@ -77,7 +80,8 @@ function render({ model, el }) {
   root.setAttribute("data-lm-suppress-shortcuts", "true");
   const style = document.createElement("style");
   style.textContent = CSS;
-  const canvas = document.createElement("canvas");
+  const canvas = document.createElement("canvas");  // the map, on which one draws
+  canvas.className = "lfd-pad-map";
   canvas.tabIndex = 0;
   canvas.setAttribute("role", "application");
   canvas.setAttribute("aria-roledescription", "sketchpad");
@@ -101,7 +105,18 @@ function render({ model, el }) {
   const live = document.createElement("div");
   live.className = "lfd-sr-only";
   live.setAttribute("aria-live", "polite");
-  root.append(style, canvas, alertBox, summary, note, legend, help, live);
+  const zoom = document.createElement("canvas");  // the target area, zoomed
+  zoom.className = "lfd-pad-zoom";
+  zoom.width = INSET_PX;
+  zoom.height = INSET_PX;
+  zoom.setAttribute("role", "img");
+  zoom.setAttribute("aria-label", "The target area, zoomed in, with rings 1 mm apart.");
+  const words = document.createElement("div");
+  words.append(summary, note);
+  const row = document.createElement("div");
+  row.className = "lfd-pad-row";
+  row.append(zoom, words);
+  root.append(style, canvas, alertBox, row, legend, help, live);
   el.appendChild(root);
 
   const ctx = canvas.getContext("2d");
@@ -311,44 +326,42 @@ function render({ model, el }) {
       c.font = "bold 13px sans-serif";
       c.fillText(String(i + 1), sx + 4, sy - 4);
     });
-    drawInset(c, g, P, fb);
+    drawInset(zoom.getContext("2d"), c, g, P, fb);
   }
 
-  function drawInset(c, g, P, fb) {
-    // A zoomed view of the target (top right), so that millimetre misses can be seen.
+  function drawInset(c, main, g, P, fb) {
+    // A zoomed view of the target beside the summary (its box is dashed on the map), so
+    // that millimetre misses can be seen without hiding any of the maze.
     const t = g.lay.target;
     const [tx, ty] = toPx(g, t.center[0], t.center[1]);
-    const x0 = g.width - INSET_PX - 4, y0 = 4;
-    const zoom = INSET_PX / (2 * INSET_HALF);  // px per metre in the inset
+    const x0 = 0, y0 = 0;
+    const ppm = INSET_PX / (2 * INSET_HALF);  // px per metre in the zoomed view
     const map = (x, y) => [
-      x0 + INSET_PX / 2 + (x - t.center[0]) * zoom,
-      y0 + INSET_PX / 2 - (y - t.center[1]) * zoom,
+      x0 + INSET_PX / 2 + (x - t.center[0]) * ppm,
+      y0 + INSET_PX / 2 - (y - t.center[1]) * ppm,
     ];
     const half = INSET_HALF * g.scale;
-    c.save();
-    c.strokeStyle = "#555";
-    c.lineWidth = 1;
-    c.setLineDash([2, 2]);
-    c.strokeRect(tx - half, ty - half, 2 * half, 2 * half);
-    c.beginPath();
-    c.moveTo(tx + half, ty - half); c.lineTo(x0, y0);
-    c.moveTo(tx + half, ty + half); c.lineTo(x0, y0 + INSET_PX);
-    c.stroke();
-    c.restore();
+    main.save();
+    main.strokeStyle = "#555";
+    main.lineWidth = 1;
+    main.setLineDash([2, 2]);
+    main.strokeRect(tx - half, ty - half, 2 * half, 2 * half);
+    main.restore();
 
+    c.clearRect(0, 0, INSET_PX, INSET_PX);
     c.save();
     c.beginPath();
     c.rect(x0, y0, INSET_PX, INSET_PX);
     c.fillStyle = "#ffffff";
     c.fill();
     c.clip();
-    const r = (t.diameter / 2) * zoom;
+    const r = (t.diameter / 2) * ppm;
     const [cx, cy] = map(t.center[0], t.center[1]);
     c.strokeStyle = "#c8c8c8";
     c.lineWidth = 1;
     for (let mm = 1; mm <= 8; mm++) {  // rings 1 mm apart beyond the target's edge
       c.beginPath();
-      c.arc(cx, cy, r + mm * 0.001 * zoom, 0, 2 * Math.PI);
+      c.arc(cx, cy, r + mm * 0.001 * ppm, 0, 2 * Math.PI);
       c.stroke();
     }
     c.fillStyle = P.target;
@@ -379,10 +392,10 @@ function render({ model, el }) {
     c.restore();
     c.strokeStyle = "#000";
     c.lineWidth = 1.5;
-    c.strokeRect(x0, y0, INSET_PX, INSET_PX);
+    c.strokeRect(x0 + 0.75, y0 + 0.75, INSET_PX - 1.5, INSET_PX - 1.5);
     c.fillStyle = "#222";
     c.font = "10px sans-serif";
-    c.fillText(`target ×${Math.round(zoom / g.scale)}`, x0 + 4, y0 + 12);
+    c.fillText(`target ×${Math.round(ppm / g.scale)}`, x0 + 4, y0 + 12);
     c.fillText("rings 1 mm apart", x0 + 4, y0 + INSET_PX - 5);
   }
 
@@ -439,7 +452,7 @@ function render({ model, el }) {
     paint();
     const demoBytes = model.get("demo_xy");
     const n = demoBytes ? Math.floor(demoBytes.byteLength / (8 * model.get("samples"))) : 0;
-    summary.textContent = model.get("summary");
+    summary.textContent = model.get("summary").replace(/ (mm|cm)\b/g, "\u00a0$1");
     note.textContent = model.get("note");
     canvas.setAttribute("aria-label", model.get("help_text"));
     root.dataset.renderId = String(model.get("render_id"));
@@ -531,7 +544,9 @@ function render({ model, el }) {
     const d = Math.hypot(x - t.center[0], y - t.center[1]);
     if (d <= t.diameter / 2) place = ", on the target";
     else if (d <= 0.02) place = `, ${(1000 * (d - t.diameter / 2)).toFixed(0)} mm from the target`;
-    g.lay.obstacles.forEach((o, i) => { if (inside(o, x, y)) place = `, inside obstacle ${i + 1}`; });
+    g.lay.obstacles.forEach((o, i) => {
+      if (inside(o, x, y)) place = `, inside obstacle ${i + 1}`;
+    });
     if (inside(g.lay.start_zone, x, y)) place += ", in the start zone";
     return `x ${cm(x)} cm, y ${cm(y)} cm${place}`;
   }
