@@ -8,11 +8,12 @@ way. Setting ``stroke`` from Python has the same effect as drawing, which is how
 runs feed demos.
 
 The picture (the maze, the realisations R^ shown, the demos b in blue, numbered, an
-optional rule circle, and beside the counts a zoomed view of the target) is redrawn by the browser when
-Python updates the traits. Paths travel as float32 bytes (binary websocket frames, no
-JSON), and only the traits that changed are sent. A failing realisation is drawn dashed,
-with a mark where it went wrong (× where it hit an obstacle or left the maze, ○ where it
-ended outside the target), and the causes are counted under the picture.
+optional rule circle, and beside the counts a zoomed view of the target) is redrawn by
+the browser when Python updates the traits. Paths travel as float32 bytes (binary
+websocket frames, no JSON), and only the traits that changed are sent. A failing
+realisation is drawn dashed, with a mark where it went wrong (× where it hit an obstacle
+or left the maze, ○ where it ended outside the target), and the causes are counted under
+the picture.
 """
 
 from __future__ import annotations
