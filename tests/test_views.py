@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 import os
+import re
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
@@ -102,11 +103,11 @@ def _pixels(fig, ax=None):
 
 def _count(rgb, colour):
     """Pixels of the hue family of ``colour`` (lines are thin, faint and antialiased,
-    so exact colours are rare): green for PASS, orange-red for FAIL, blue for DEMO."""
+    so exact colours are rare): green for PASS, dark red for FAIL, blue for DEMO."""
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
     masks = {
-        PASS: (g - r > 60) & (g > b),
-        FAIL: (r - b > 100) & (r - g > 50),
+        PASS: (g - r > 40) & (g - b > 40),
+        FAIL: (r - g > 40) & (r - b > 40) & (g < 140),
         DEMO: (b - r > 90) & (b - g > 40),
     }
     return int(masks[colour].sum())
@@ -242,3 +243,125 @@ def test_teaching_views_are_task_agnostic():
         a.name for node in ast.walk(tree) if isinstance(node, ast.Import) for a in node.names
     ]
     assert not any("tasks" in name for name in names)
+
+
+# ------------------------------------------------------------ why attempts fail
+
+
+def _paths_that_fail(layout):
+    """Five realisations (5, 200, 2): pass, obstacle 2, leaves the maze, near miss, far miss."""
+    good = layout.reference_path((0.05, 0.03))[:, 1:]
+    hit2 = good.copy()
+    hit2[120:] = [0.15, 0.195]  # parks inside obstacle 2 (x 7–20 cm, y 18–21 cm)
+    out = good.copy()
+    out[60:] = [0.25, 0.10]  # right of the 20 cm wide maze
+    near = good + [0.0, -(layout.target_radius + 0.003)] * np.linspace(0, 1, 200)[:, None]
+    far = good + [0.0, -(layout.target_radius + 0.02)] * np.linspace(0, 1, 200)[:, None]
+    return np.stack([good, hit2, out, near, far])
+
+
+def test_classify_reads_the_maze_tasks_own_reasons(task):
+    from tutor.views.maze_reasons import classify, failures
+
+    paths = _paths_that_fail(task.layout)
+    verdict = task.judge(paths)
+    assert verdict.passed.tolist() == [True, False, False, False, False]
+    kinds = [classify(r).kind for r in verdict.reasons]
+    assert kinds == ["pass", "obstacle", "outside", "miss", "miss"]
+    assert classify(verdict.reasons[1]).obstacle == "obstacle 2"
+    found = failures(paths, verdict.reasons, task.layout)
+    np.testing.assert_allclose(found[1].point, [0.15, 0.195])  # where it went in
+    np.testing.assert_allclose(found[2].point, [0.25, 0.10])
+    assert found[3].miss == pytest.approx(0.003, abs=1e-6)  # from the target's edge
+    assert found[0].point is None and found[0].miss == 0.0
+    assert classify("did not start in the start zone").kind == "start"
+    assert classify("something new").kind == "other"
+
+
+def test_reason_summary_counts_each_cause(task):
+    from tutor.views.maze_reasons import failures, reason_summary
+
+    paths = _paths_that_fail(task.layout)
+    paths = np.concatenate([paths, paths[3:4] + [0.0, -0.001]])  # a second near miss, 4 mm
+    found = failures(paths, task.judge(paths).reasons, task.layout)
+    text = reason_summary(found)
+    assert text.startswith("2 miss the target by 3–4 mm; ")
+    assert "1 hits obstacle 2" in text and "1 leaves the maze" in text
+    assert "1 ends 2.0 cm from the target" in text
+    assert reason_summary(found, shown=[0]) == ""  # only what is shown is counted
+    assert reason_summary(found, shown=[1, 0]) == "1 hits obstacle 2"
+
+
+def test_feedback_marks_failures_dashed_with_reasons_and_a_target_inset(vf, task):
+    ax = plot_feedback(vf)
+    fails = [ln for ln in ax.get_lines() if to_rgb(ln.get_color()) == to_rgb(FAIL)]
+    passes = [ln for ln in ax.get_lines() if to_rgb(ln.get_color()) == to_rgb(PASS)]
+    lines = [ln for ln in fails if ln.get_marker() in ("None", "", None)]
+    assert lines and all(ln.get_linestyle() not in ("-", "None") for ln in lines)  # dashed
+    assert passes and all(ln.get_linestyle() == "-" for ln in passes)
+    why = [t for t in ax.texts if t.get_gid() == "failure-reasons"]
+    assert len(why) == 1 and why[0].get_text().startswith("why they fail: ")
+    n_fail = int((~vf.latest.passed).sum())
+    counted = sum(
+        int(n) for n in re.findall(r"(?:: |; )(\d+) ", why[0].get_text().replace("\n", " "))
+    )
+    assert counted == n_fail
+    marks = [ln for ln in ax.get_lines() if (ln.get_gid() or "").startswith("failure-")]
+    assert sum(len(ln.get_xdata()) for ln in marks) == n_fail
+    # the target is drawn to scale (no oversized ring), and zoomed in an inset
+    circles = [p for p in ax.patches if isinstance(p, matplotlib.patches.Circle)]
+    assert [c.radius for c in circles] == [task.layout.target_radius]
+    assert not any(ln.get_marker() == "o" and ln.get_markersize() > 8 for ln in ax.get_lines())
+    (inset,) = ax.child_axes
+    assert np.ptp(inset.get_xlim()) <= 0.02
+    tx = task.layout.target_center[0]
+    assert inset.get_xlim()[0] < tx < inset.get_xlim()[1]
+
+
+def test_no_feedback_counts_no_reasons(nf):
+    ax = plot_feedback(nf)
+    assert not [t for t in ax.texts if t.get_gid() == "failure-reasons"]
+
+
+# ------------------------------------------------------------ the sketchpad's data
+
+
+def test_sketchpad_layout_is_the_widget_layout(task):
+    """The maze geometry has its own trait: a dict in `layout` broke every render (3 page
+    errors "Cannot read properties of undefined (reading 'then')" in notebook 02)."""
+    import ipywidgets
+
+    from tutor.errors import InvalidParameterError
+    from tutor.views.sketchpad import Sketchpad, layout_spec
+
+    spec = layout_spec(task.layout)
+    for pad in (Sketchpad(maze=spec), Sketchpad(layout=spec)):
+        assert isinstance(pad.layout, ipywidgets.Layout)
+        assert pad.maze == spec
+        assert pad.get_state()["layout"].startswith("IPY_MODEL_")
+    with pytest.raises(InvalidParameterError, match="maze"):
+        Sketchpad()
+    with pytest.raises(InvalidParameterError, match="once"):
+        Sketchpad(maze=spec, layout=spec)
+
+
+def test_sketchpad_sends_paths_as_bytes_and_counts_reasons(vf, task):
+    from tutor.errors import InvalidParameterError
+    from tutor.views.sketchpad import BROWSER_SAMPLES, Sketchpad, layout_spec
+
+    pad = Sketchpad(maze=layout_spec(task.layout))
+    rec = vf.latest
+    pad.show(vf.demos, vf.realisations, rec.passed, rec.shown, reasons=rec.reasons)
+    n = len(task.conditions)
+    assert isinstance(pad.real_xy, bytes) and len(pad.real_xy) == n * BROWSER_SAMPLES * 2 * 4
+    assert len(pad.realisations) == n and len(pad.demos) == 3
+    np.testing.assert_allclose(pad.realisations[7][-1], vf.realisations[7, -1], atol=1e-6)
+    np.testing.assert_allclose(pad.demos[0][0], vf.demos[0][0, 1:], atol=1e-6)
+    n_fail = int((~rec.passed).sum())
+    assert len(pad.marks) == n_fail and {m[2] for m in pad.marks} <= {1, 2, 3, 4}
+    assert pad.summary and "target" in pad.summary
+    # only what is shown: nothing shown, nothing counted
+    pad.show(vf.demos, vf.realisations, rec.passed, [], reasons=rec.reasons)
+    assert pad.marks == [] and pad.summary == ""
+    with pytest.raises(InvalidParameterError, match="one per realisation"):
+        pad.show(vf.demos, vf.realisations, rec.passed, rec.shown, reasons=rec.reasons[:3])

@@ -175,9 +175,38 @@ def browser():
         b.close()
 
 
+#: console errors that are not the page's fault: the browser's own network log lines
+#: (a resource the server answers 404, e.g. a missing favicon or an optional settings
+#: file JupyterLab probes for). Page errors (uncaught exceptions) are never ignored.
+BENIGN_CONSOLE = ("Failed to load resource",)
+
+
 @pytest.fixture
-def page(browser, tmp_path):
+def page(browser, tmp_path, request):
+    """A fresh page; the test fails at teardown on any page error or console error.
+
+    Tests that mean to cause a console error (e.g. a dead kernel's failed websocket) set
+    ``pg.allowed_console_errors`` to a tuple of substrings to tolerate.
+    """
     context = browser.new_context(viewport={"width": 1400, "height": 1000})
     pg = context.new_page()
+    errors: list[str] = []
+    pg.allowed_console_errors = ()
+    pg.on("pageerror", lambda exc: errors.append(f"page error: {exc}\n{exc.stack or ''}"))
+
+    def on_console(msg):
+        if msg.type != "error":
+            return
+        text = msg.text
+        if any(s in text for s in BENIGN_CONSOLE + tuple(pg.allowed_console_errors)):
+            return
+        errors.append(f"console error: {text} ({msg.location.get('url', '')})")
+
+    pg.on("console", on_console)
     yield pg
     context.close()
+    if errors:
+        ARTIFACTS.mkdir(exist_ok=True)
+        log = ARTIFACTS / f"page_errors_{request.node.name}.txt"
+        log.write_text("\n\n".join(errors))
+        pytest.fail(f"{len(errors)} page/console error(s) (see {log.name}): {errors[0][:500]}")

@@ -15,13 +15,18 @@ r
     R^ (visual feedback), a fixed batch, a replay or the teacher's own choice.
 
 The main picture is :func:`plot_feedback`, the paper's feedback figure: the
-maze, R^ in green where a realisation meets the task criteria (stays in X,
-starts in I, ends in the target beta) and in red where it does not, and the
-demos in blue, numbered in the order given. Positions are stored in metres;
-the axes are labelled in centimetres.
+maze, R^ as solid green lines where a realisation meets the task criteria (stays
+in X, starts in I, ends in the target beta) and dashed dark red lines where it does
+not, each failure marked where it went wrong (× where it hit an obstacle or left the
+maze, ○ where it ended outside the target) and its causes counted under the
+picture, and the demos in blue, numbered in the order given. The target is drawn to
+scale, with a zoomed inset of the target area so that millimetre misses show.
+Positions are stored in metres; the axes are labelled in centimetres.
 """
 
 from __future__ import annotations
+
+import textwrap
 
 import numpy as np
 from matplotlib.lines import Line2D
@@ -29,7 +34,19 @@ from matplotlib.patches import Circle, Patch, Rectangle
 from matplotlib.ticker import FuncFormatter, MultipleLocator
 
 from ..tasks.maze import load_layout
-from .style import DEMO, FAIL, OBSTACLE, PASS, START_ZONE, TARGET, new_axes
+from .maze_reasons import failures, reason_summary
+from .style import (
+    DEMO,
+    FAIL,
+    FAIL_DASH,
+    OBSTACLE,
+    PASS,
+    PASS_DASH,
+    START_ZONE,
+    TARGET,
+    UNDEMONSTRATED,
+    new_axes,
+)
 
 __all__ = ["draw_maze", "plot_feedback", "plot_grid_status", "realisations_at"]
 
@@ -74,8 +91,8 @@ def draw_maze(ax=None, layout=None, zone_label=True):
 
     Notes
     -----
-    The target is 0.5 cm across, a few pixels at screen size, so a ring marker
-    is drawn around it and it is labelled "target".
+    The target is drawn to scale (0.5 cm across, a few pixels at screen size), with
+    a black edge and the label "target β"; :func:`plot_feedback` adds a zoomed inset.
     """
     if layout is None:
         layout = load_layout()
@@ -139,18 +156,14 @@ def draw_maze(ax=None, layout=None, zone_label=True):
         )
     tx, ty = layout.target_center
     ax.add_patch(
-        Circle((tx, ty), layout.target_radius, facecolor=TARGET, edgecolor="none", zorder=5)
-    )
-    ax.plot(
-        [tx],
-        [ty],
-        marker="o",
-        markersize=11,
-        markerfacecolor="none",
-        markeredgecolor=TARGET,
-        markeredgewidth=1.6,
-        linestyle="none",
-        zorder=5,
+        Circle(
+            (tx, ty),
+            layout.target_radius,
+            facecolor=TARGET,
+            edgecolor="black",
+            linewidth=0.6,
+            zorder=5,
+        )
     )
     ax.annotate(
         "target β",
@@ -240,10 +253,12 @@ def _draw_demos(ax, demos):
 def plot_feedback(session, ax=None, step=-1, reveal=False):
     """The paper's feedback picture: R^ (or r) over the maze, with the numbered demos.
 
-    Realisations that meet the task criteria are green, the others red; the
-    teacher's demos are blue and numbered in the order given (the number sits at
-    each demo's start; numbers of demos with (nearly) the same start are nudged
-    apart).
+    Realisations that meet the task criteria are solid green, the others dashed
+    dark red, each marked where it went wrong (× hit an obstacle or left the maze,
+    ○ ended outside the target) with the causes counted under the picture, and a
+    zoomed inset shows the target area (top right); the teacher's demos are blue
+    and numbered in the order given (the number sits at each demo's start; numbers
+    of demos with (nearly) the same start are nudged apart).
 
     Parameters
     ----------
@@ -265,7 +280,8 @@ def plot_feedback(session, ax=None, step=-1, reveal=False):
     -------
     matplotlib.axes.Axes
         The legend (outside, right) counts the passing and failing realisations
-        drawn and the demos; a line above the maze says what is shown.
+        drawn, the failure marks and the demos; a line above the maze says what is
+        shown, and one below it why the failing ones fail.
     """
     task = session.task
     ax = draw_maze(ax, task.layout, zone_label=False)
@@ -290,8 +306,10 @@ def plot_feedback(session, ax=None, step=-1, reveal=False):
     everything = np.array_equal(np.unique(shown), np.arange(n))
     highlight = reveal and shown.size > 0 and not everything
     drawn = np.arange(n) if reveal else shown
+    found = []
     if drawn.size:
         mean = realisations_at(session, i)
+        found = failures(mean, record.reasons, task.layout)
         if highlight:
             rest = np.setdiff1d(np.arange(n), shown)
             _draw_realisations(ax, mean, passed, rest, linewidth=0.5, alpha=0.3, zorder=1)
@@ -309,17 +327,62 @@ def plot_feedback(session, ax=None, step=-1, reveal=False):
             )
         else:
             few = drawn.size <= 20  # a small r (batch, replay) can afford thicker lines
-            width, alpha = (1.4, 0.95) if few else (0.7, 0.75)
+            width, alpha = (1.4, 0.95) if few else (0.8, 0.8)
             _draw_realisations(ax, mean, passed, drawn, linewidth=width, alpha=alpha, zorder=1)
+        _draw_failure_marks(ax, found, drawn)
     _draw_demos(ax, demos)
+    if drawn.size or demos:
+        _target_inset(ax, task.layout, mean if drawn.size else None, passed, drawn, found, demos)
 
     n_pass = int(passed[drawn].sum())
     handles = []
     if drawn.size:
         handles += [
-            Line2D([], [], color=PASS, linewidth=1.2, label=f"meets the criteria ({n_pass})"),
-            Line2D([], [], color=FAIL, linewidth=1.2, label=f"fails ({drawn.size - n_pass})"),
+            Line2D(
+                [],
+                [],
+                color=PASS,
+                linewidth=1.2,
+                linestyle=PASS_DASH,
+                label=f"meets the criteria ({n_pass})",
+            ),
+            Line2D(
+                [],
+                [],
+                color=FAIL,
+                linewidth=1.2,
+                linestyle=FAIL_DASH,
+                label=f"fails ({drawn.size - n_pass})",
+            ),
         ]
+        kinds = [found[k].kind for k in drawn]
+        crashes = sum(k in ("obstacle", "outside", "start") for k in kinds)
+        misses = sum(k in ("miss", "other") for k in kinds)
+        if crashes:
+            handles.append(
+                Line2D(
+                    [],
+                    [],
+                    color=FAIL,
+                    marker="x",
+                    markersize=5,
+                    linestyle="none",
+                    label=f"hit an obstacle or left the maze here ({crashes})",
+                )
+            )
+        if misses:
+            handles.append(
+                Line2D(
+                    [],
+                    [],
+                    color=FAIL,
+                    marker="o",
+                    markerfacecolor="none",
+                    markersize=5,
+                    linestyle="none",
+                    label=f"ended outside the target ({misses})",
+                )
+            )
     handles.append(Line2D([], [], color=DEMO, linewidth=1.8, label=f"demos b ({len(demos)})"))
     if highlight:
         handles.append(
@@ -349,7 +412,25 @@ def plot_feedback(session, ax=None, step=-1, reveal=False):
     else:
         what = "no feedback shown"
     _caption(ax, f"after demo {record.n_demos}: {what}", italic=not drawn.size)
+    why = reason_summary(found, drawn) if drawn.size else ""
+    if why:
+        ax.text(
+            0.0,
+            -0.09,
+            textwrap.fill(f"why they fail: {_unbroken(why)}", 64),
+            transform=ax.transAxes,
+            ha="left",
+            va="top",
+            fontsize=7,
+            color="0.15",
+            gid="failure-reasons",
+        )
     return ax
+
+
+def _unbroken(text: str) -> str:
+    """``text`` with its numbers and units held together (no line break in "1–5 mm")."""
+    return text.replace(" mm", "\u00a0mm").replace(" cm", "\u00a0cm")
 
 
 def _passes(k):
@@ -372,15 +453,108 @@ def _caption(ax, text, italic=False):
 
 
 def _draw_realisations(ax, mean, passed, idx, **style):
+    """Passing paths solid green, failing ones dashed dark red on top (they are the news)."""
     idx = np.asarray(idx, dtype=int)
-    # failures first, so the passing paths stay visible where they overlap
-    for mask, colour in ((~passed[idx], FAIL), (passed[idx], PASS)):
+    for mask, colour, dash in ((passed[idx], PASS, PASS_DASH), (~passed[idx], FAIL, FAIL_DASH)):
         sel = idx[mask]
         if sel.size == 0:
             continue
         xs = np.column_stack([mean[sel, :, 0], np.full(sel.size, np.nan)]).ravel()
         ys = np.column_stack([mean[sel, :, 1], np.full(sel.size, np.nan)]).ravel()
-        ax.plot(xs, ys, color=colour, solid_capstyle="round", **style)
+        ax.plot(xs, ys, color=colour, linestyle=dash, solid_capstyle="round", **style)
+
+
+def _draw_failure_marks(ax, found, idx, size=4.5, zorder=6.5):
+    """× where a shown realisation hit an obstacle or left the maze, ○ where it ended."""
+    crash = [found[k].point for k in idx if found[k].kind in ("obstacle", "outside", "start")]
+    miss = [found[k].point for k in idx if found[k].kind in ("miss", "other")]
+    if crash:
+        xy = np.array(crash)
+        ax.plot(
+            xy[:, 0],
+            xy[:, 1],
+            "x",
+            color=FAIL,
+            markersize=size,
+            markeredgewidth=1.2,
+            linestyle="none",
+            zorder=zorder,
+            gid="failure-crash",
+        )
+    if miss:
+        xy = np.array(miss)
+        ax.plot(
+            xy[:, 0],
+            xy[:, 1],
+            "o",
+            color=FAIL,
+            markerfacecolor="none",
+            markersize=size * 0.8,
+            markeredgewidth=0.9,
+            linestyle="none",
+            zorder=zorder,
+            gid="failure-miss",
+        )
+
+
+#: half the side of the region the target inset shows (metres)
+INSET_HALF = 0.008
+
+
+def _target_inset(ax, layout, mean, passed, idx, found, demos):
+    """A zoomed inset (top right) of the target area, rings 1 mm apart beyond its edge."""
+    inset = ax.inset_axes([0.62, 0.745, 0.36, 0.245], zorder=9)
+    tx, ty = layout.target_center
+    inset.set_xlim(tx - INSET_HALF, tx + INSET_HALF)
+    inset.set_ylim(ty - INSET_HALF, ty + INSET_HALF)
+    inset.set_aspect("equal")
+    inset.set_xticks([])
+    inset.set_yticks([])
+    inset.set_facecolor("white")
+    for mm in range(1, 9):
+        inset.add_patch(
+            Circle(
+                (tx, ty),
+                layout.target_radius + mm / 1000,
+                facecolor="none",
+                edgecolor="0.8",
+                linewidth=0.5,
+                zorder=0,
+            )
+        )
+    inset.add_patch(
+        Circle(
+            (tx, ty),
+            layout.target_radius,
+            facecolor=TARGET,
+            edgecolor="black",
+            linewidth=0.6,
+            zorder=1,
+        )
+    )
+    if mean is not None and len(idx):
+        _draw_realisations(inset, mean, passed, idx, linewidth=0.9, alpha=0.85, zorder=2)
+        ends = mean[np.asarray(idx)[passed[idx]], -1]
+        inset.plot(
+            ends[:, 0], ends[:, 1], "o", color=PASS, markersize=2.5, linestyle="none", zorder=3
+        )
+        _draw_failure_marks(inset, found, idx, size=4, zorder=4)
+    for demo in demos:
+        inset.plot(demo[:, 1], demo[:, 2], color=DEMO, linewidth=1.4, zorder=3)
+    zoom = (0.36 * np.ptp(ax.get_xlim())) / (2 * INSET_HALF)
+    inset.text(
+        0.03,
+        0.03,
+        f"target ×{zoom:.0f}\nrings 1 mm apart",
+        transform=inset.transAxes,
+        fontsize=5.5,
+        va="bottom",
+        color="0.2",
+        bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8},
+        zorder=5,
+    )
+    ax.indicate_inset_zoom(inset, edgecolor="0.3", linewidth=0.6)
+    return inset
 
 
 def _group_numbers(points, tol=0.004):
@@ -404,7 +578,7 @@ def plot_grid_status(session, ax=None, step=-1):
     - covered (green): the realisation from this start point meets the criteria;
     - demonstrated, still fails (blue): a correct demo starts within half a grid
       cell, but the realisation fails;
-    - undemonstrated (orange-red): the realisation fails and no demo covers it.
+    - undemonstrated (lavender): the realisation fails and no demo covers it.
 
     A blue ring marks every point a correct demo covers; the demos' start points
     are drawn as blue stars (hollow for incorrect demos), numbered.
@@ -454,7 +628,7 @@ def plot_grid_status(session, ax=None, step=-1):
     for mask, colour, label in (
         (passed, PASS, "covered (passes)"),
         (demo_fail, DEMO, "demonstrated, still fails"),
-        (undemonstrated, FAIL, "undemonstrated"),
+        (undemonstrated, UNDEMONSTRATED, "undemonstrated"),
     ):
         h = ax.scatter(
             grid[mask, 0],

@@ -63,7 +63,7 @@ class MazeTutor(TutorApp):
     ):
         task = MazeTask() if task is None else task
         super().__init__(MazeRun, condition, task, session_file, trainee, practice=practice)
-        self.pad = Sketchpad(layout=layout_spec(self.task.layout), width_px=width_px)
+        self.pad = Sketchpad(maze=layout_spec(self.task.layout), width_px=width_px)
         self.panel = w.HTML(layout=w.Layout(width="380px"))
         self.buttons = {
             name: w.Button(description=name, layout=w.Layout(width="86px"))
@@ -162,7 +162,9 @@ class MazeTutor(TutorApp):
             )
             self.pad.show(s.demos, rule_circle=rule, note=note)
         else:
-            self.pad.show(s.demos, s.realisations, rec.passed, vis.shown, rule)
+            self.pad.show(
+                s.demos, s.realisations, rec.passed, vis.shown, rule, reasons=rec.reasons
+            )
         self.pad.enabled = not self.finished and not self.read_only
         for name in ("Undo", "Reset", "Finish", "Save"):
             self.buttons[name].disabled = self.read_only

@@ -7,7 +7,7 @@ mistake, to see what it does). What the robot then shows depends on the conditio
 teaching time the paper's trainees had (15 minutes; 25 s per robot attempt).
 
 Tray colours (as in the paper's good-versus-bad figure): green, the robot succeeds;
-orange, it fails and no demo covers the plant (undemonstrated); blue, demonstrated;
+dark red ✗, it fails; blue ●, demonstrated;
 grey, not shown to the trainee (yet).
 """
 
@@ -25,16 +25,17 @@ from ..runtime import headless
 from ..tasks.pickplace import PickPlaceTask
 from ..tasks.pickplace_protocol import PickPlaceRun
 from .app import TutorApp, guarded
-from .style import DEMO, FAIL, PASS
+from .style import DEMO, FAIL, PASS, UNKNOWN
 from .text import compose, finish_summary, plain_reason
 
 __all__ = ["PickPlaceTutor", "tray_status", "compare_runs", "PAPER_MEAN_ETA", "PAPER_THIRD_RUN_ETA"]
 
-UNKNOWN = "#d0d0d0"
 #: a click that arrives this soon after a demo ended is the second half of a double click
 DOUBLE_CLICK_SECONDS = 0.4
 TRAY_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
 TRAY_GLYPHS = {"pass": "✓", "fail": "✗", "demo": "●", "unknown": ""}
+#: glyph colours that stand out on each status colour
+TRAY_TEXT = {"pass": "#000000", "fail": "#ffffff", "demo": "#ffffff", "unknown": "#000000"}
 STATUS_WORDS = {
     "pass": "the robot succeeds",
     "fail": "the robot fails",
@@ -351,6 +352,7 @@ class PickPlaceTutor(TutorApp):
             selected = i == self.selected
             tip = f"{self.task.plant_name(i)}: {words}" + (" (selected)" if selected else "")
             _set(b.style, "button_color", TRAY_COLOURS[kind])
+            _set(b.style, "text_color", TRAY_TEXT[kind])
             _set(b, "description", TRAY_GLYPHS[kind])
             _set(b, "tooltip", tip)
             _set(b.layout, "border", "3px solid #111111" if selected else "1px solid #ffffff")

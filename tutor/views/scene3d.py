@@ -7,10 +7,10 @@ What the trainee sees
   :mod:`tutor.tasks.pickplace`).
 - The 100 plants, each a thin stem with a ball on top coloured as on the tray map
   (:func:`tutor.views.pickplace_app.tray_status`, the paper's good-versus-bad figure):
-  green the robot succeeds, orange it fails (and no demo covers the plant), blue
+  green the robot succeeds, dark red it fails, blue
   demonstrated, light grey not seen yet.
 - The demonstrations as blue trails; the robot's attempts the trainee was shown as
-  green (success) or orange (failure) trails.
+  green (success) or dark red (failure) trails.
 - One trajectory animated: the arm follows it (:meth:`tutor.robot.Arm.follow` turns
   the tool path into joint configurations) while a ball between the fingers shows
   the hand, yellow when open and purple when closed (holding the plant); the
@@ -91,7 +91,7 @@ from .scene_meshes import (
     robot_meshes,
 )
 from .scene_page import choose_mode, live_page_url, page, scene_data, viewer_widget_class
-from .style import DEMO, FAIL, PASS
+from .style import DEMO, FAIL, PASS, UNKNOWN
 
 __all__ = [
     "Scene3D",
@@ -103,7 +103,6 @@ __all__ = [
     "choose_mode",
 ]
 
-UNKNOWN = "#d0d0d0"  # as tutor.views.pickplace_app.UNKNOWN
 #: colour of a plant's ball by status (the tray map's colours)
 STATUS_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
 

@@ -55,8 +55,8 @@ def plot_progress(session, ax=None, target=0.9):
     matplotlib.axes.Axes
         x is the demo number (integer ticks), y the percentage. The efficacy
         line has gid ``"efficacy"`` and the efficiency line gid ``"efficiency"``.
-        Demos with an incorrect warning get a red cross, ambiguous ones an
-        orange diamond (on the efficacy line).
+        Demos with an incorrect warning get a wine cross, ambiguous ones a
+        yellow diamond with a dark edge (on the efficacy line).
     """
     ax = new_axes(ax, figsize=(5.0, 3.5))
     history = session.history
@@ -109,8 +109,9 @@ def plot_progress(session, ax=None, target=0.9):
                 marker=marker,
                 markersize=size,
                 markeredgewidth=2.2 if marker == "x" else 1.2,
-                markerfacecolor="none" if marker == "D" else colour,
-                markeredgecolor=colour,
+                # the yellow diamond is filled and edged dark so it shows on white
+                markerfacecolor=colour,
+                markeredgecolor="#222222" if marker == "D" else colour,
                 label=f"{label} ({int(sel.sum())})",
                 zorder=4,
             )

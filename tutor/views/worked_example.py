@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..framework import Trainee
-from .style import AMBIGUOUS, DEMO, FAIL, PASS
+from .style import AMBIGUOUS, DEMO, FAIL, PASS, UNKNOWN
 
 __all__ = ["INSTRUCTIONS", "instruction_text", "example_png", "instruction_widget"]
 
@@ -34,7 +34,7 @@ INSTRUCTIONS = {
     ),
     (1, "VF"): (
         "Visual feedback. After each demonstration the robot tries the maze from 140 "
-        "start points: green lines succeed, orange ones fail. Start your next "
+        "start points: solid green lines succeed, dashed dark red ones fail. Start your next "
         "demonstration where the lines fail."
     ),
     (1, "VR"): (
@@ -49,11 +49,11 @@ INSTRUCTIONS = {
     ),
     (2, "RF"): (
         "Replay. After each demonstration the robot tries the plant you just showed it: "
-        "green if it succeeds, orange if it fails. It costs 25 s of your 15 minutes."
+        "green if it succeeds, dark red if it fails. It costs 25 s of your 15 minutes."
     ),
     (2, "BF"): (
         "Batch. After each demonstration the robot tries five plants, the four corners "
-        "and the centre: green succeeds, orange fails. It costs 125 s of your 15 minutes."
+        "and the centre: green succeeds, dark red fails. It costs 125 s of your 15 minutes."
     ),
     (2, "SF"): (
         "You choose the tests. After a demonstration, select a plant and press Test "
@@ -65,7 +65,6 @@ INSTRUCTIONS = {
 #: the plants the pick-and-place example demonstrates, and the ones SF asks to test
 _EXAMPLE_PLANTS = (44, 0)
 _SF_TESTS = (99, 9)
-_UNKNOWN = "#d0d0d0"
 
 
 def instruction_text(experiment: int, condition: str) -> str:
@@ -166,7 +165,7 @@ def _maze_frames(axes, condition: str) -> None:
         frame(axes[1], 3, False, "2. You see only your own paths")
         frame(axes[2], 3, True, "3. After Finish: what it learned")
     elif condition == "VF":
-        frame(axes[1], 3, True, "2. Robot's tries: green ok, orange fail")
+        frame(axes[1], 3, True, "2. Robot's tries: green ok, dark red fail")
         frame(axes[2], 4, True, "3. Demo 4 where they failed")
     else:
         import matplotlib.patches as mpatches
@@ -226,7 +225,7 @@ def _status(run, reveal: bool) -> np.ndarray:
 def _tray(ax, task, status, title: str) -> None:
     """The tray as the map draws it (as the 3-D view's camera sees it): row 1, nearest
     the robot, at the top; column 1 on the left; status by colour and glyph."""
-    colours = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": _UNKNOWN}
+    colours = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
     glyphs = {"pass": "✓", "fail": "✗", "demo": "●", "unknown": ""}
     rows, cols = task.scene.rows, task.scene.cols
     for i, s in enumerate(status):

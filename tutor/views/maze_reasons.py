@@ -1,0 +1,177 @@
+"""Why each maze attempt fails, in a form a picture can draw and a sentence can count.
+
+The maze task's criteria (:meth:`tutor.tasks.maze.MazeTask.judge`) give every failing
+realisation a reason such as ``"hit obstacle 2 (right-hand) at sample 97 of 200 and
+ended 5.1 cm from the target"``. :func:`classify` turns one reason into its main cause
+(the first thing that went wrong along the path), :func:`failures` adds where on the
+path it happened, and :func:`reason_summary` counts the causes, e.g. "93 miss the
+target by 1–4 mm; 12 hit obstacle 2".
+
+A miss is measured from the target's edge (how far the attempt would have had to go
+on to reach the target), not from its centre.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Failure", "KINDS", "classify", "failures", "reason_summary"]
+
+#: the causes, in the order a summary lists equal counts; "pass" is no failure
+KINDS = ("pass", "obstacle", "outside", "start", "miss", "other")
+
+#: a miss up to this far from the target's edge is "near" (counted in millimetres)
+NEAR_MISS = 0.005
+
+_HIT = re.compile(r"hit (?P<name>.+?) at sample (?P<k>\d+) of \d+")
+_LEFT = re.compile(r"left the workspace at sample (?P<k>\d+) of \d+")
+_START = "did not start in the start zone"
+_ENDED = re.compile(r"ended [\d.]+ c?m from the target")
+
+
+@dataclass(frozen=True)
+class Failure:
+    """The main cause of one realisation's failure.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    sample : int or None
+        0-based index of the first sample inside an obstacle or outside the workspace
+        (kinds "obstacle" and "outside"), else None.
+    obstacle : str
+        Short name of the obstacle hit ("obstacle 2"), else "".
+    point : tuple of float or None
+        Where it went wrong (metres): the first bad sample, the start (kind "start")
+        or the end (kind "miss"); set by :func:`failures`.
+    miss : float
+        How far the end is from the target's edge (metres), for every realisation.
+    """
+
+    kind: str
+    sample: int | None = None
+    obstacle: str = ""
+    point: tuple[float, float] | None = None
+    miss: float = 0.0
+
+
+def classify(reason: str) -> Failure:
+    """The main cause named by one reason string of the maze task ("" means it passes).
+
+    A path that hits an obstacle or leaves the workspace is counted by that, even when
+    it also ends away from the target: the end follows from the crash.
+    """
+    if not reason:
+        return Failure("pass")
+    hit = _HIT.search(reason)
+    if hit:
+        name = hit.group("name").split(" (")[0]
+        return Failure("obstacle", int(hit.group("k")) - 1, name)
+    left = _LEFT.search(reason)
+    if left:
+        return Failure("outside", int(left.group("k")) - 1)
+    if _START in reason:
+        return Failure("start")
+    if _ENDED.search(reason):
+        return Failure("miss")
+    return Failure("other")
+
+
+def failures(paths, reasons, layout) -> list[Failure]:
+    """Each realisation's :class:`Failure`, with the point where it went wrong.
+
+    Parameters
+    ----------
+    paths : ndarray (n, T, 2)
+        The realisations R^ (metres), at the resolution they were judged.
+    reasons : sequence of str, length n
+        The task's reasons ("" for a realisation that passes).
+    layout : MazeLayout
+        For the target (the miss is measured from its edge).
+    """
+    paths = np.asarray(paths, dtype=float)
+    out = []
+    ends = paths[:, -1] if len(paths) else np.zeros((0, 2))
+    miss = np.linalg.norm(ends - layout.target_center, axis=1) - layout.target_radius
+    for i, reason in enumerate(reasons):
+        f = classify(reason)
+        if f.kind in ("obstacle", "outside"):
+            point = paths[i, min(f.sample, paths.shape[1] - 1)]
+        elif f.kind == "start":
+            point = paths[i, 0]
+        elif f.kind in ("miss", "other"):
+            point = paths[i, -1]
+        else:
+            point = None
+        out.append(
+            Failure(
+                f.kind,
+                f.sample,
+                f.obstacle,
+                None if point is None else (float(point[0]), float(point[1])),
+                float(max(miss[i], 0.0)),
+            )
+        )
+    return out
+
+
+def _span(values, unit: float, name: str) -> str:
+    lo, hi = float(np.min(values)) / unit, float(np.max(values)) / unit
+    if name == "mm":
+        lo, hi = max(1, round(lo)), max(1, round(hi))
+        return f"{lo} mm" if lo == hi else f"{lo}–{hi} mm"
+    return f"{lo:.1f} cm" if round(lo, 1) == round(hi, 1) else f"{lo:.1f}–{hi:.1f} cm"
+
+
+def reason_summary(found, shown=None) -> str:
+    """Count the causes among the shown realisations, largest first.
+
+    Parameters
+    ----------
+    found : sequence of Failure
+        From :func:`failures`.
+    shown : sequence of int, optional
+        Indices of the realisations to count (default all).
+
+    Returns
+    -------
+    str
+        E.g. "93 miss the target by 1–4 mm; 12 hit obstacle 2; 2 end 1.2–3.4 cm from
+        the target" (a far miss is measured from the target's edge too), or "" when
+        none of them fails.
+    """
+    idx = range(len(found)) if shown is None else [int(i) for i in shown]
+    groups: dict[tuple, list[Failure]] = {}
+    for i in idx:
+        f = found[i]
+        if f.kind == "pass":
+            continue
+        if f.kind == "miss":
+            key = ("miss", "near" if f.miss <= NEAR_MISS else "far")
+        else:
+            key = (f.kind, f.obstacle)
+        groups.setdefault(key, []).append(f)
+    parts = []
+    for key, items in groups.items():
+        n = len(items)
+        kind, detail = key
+        if kind == "miss" and detail == "near":
+            text = f"miss the target by {_span([f.miss for f in items], 0.001, 'mm')}"
+        elif kind == "miss":
+            text = f"end {_span([f.miss for f in items], 0.01, 'cm')} from the target"
+        elif kind == "obstacle":
+            text = f"hit{'s' if n == 1 else ''} {detail}"
+        elif kind == "outside":
+            text = f"leave{'s' if n == 1 else ''} the maze"
+        elif kind == "start":
+            text = f"start{'s' if n == 1 else ''} outside the start zone"
+        else:
+            text = f"fail{'s' if n == 1 else ''} for another reason"
+        if n == 1 and kind == "miss":
+            text = text.replace("miss ", "misses ", 1).replace("end ", "ends ", 1)
+        parts.append((-n, KINDS.index(kind), f"{n} {text}"))
+    return "; ".join(p[2] for p in sorted(parts))
