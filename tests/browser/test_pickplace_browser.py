@@ -134,6 +134,12 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
     )
     page.get_by_role("menuitem", name="Run", exact=True).click()
     page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
+    # the start form: choose BF with the mouse, keep the default name, press Start
+    form = page.locator(".lfd-start-form")
+    form.wait_for(timeout=WIDGET_TIMEOUT_MS)
+    form.locator(".lfd-start-condition").get_by_role("button", name="BF", exact=True).click()
+    page.screenshot(path=str(artifacts / "pickplace_start_form.png"))
+    form.locator(".lfd-start-go").click()
     tutor = _tutor(page, 1)
     try:
         tutor.wait_for(timeout=WIDGET_TIMEOUT_MS)
@@ -207,7 +213,10 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
     from tutor.tasks.pickplace_protocol import clock
 
     two, _ = runs_near_the_cap
+    # run 2 appears once run 1 is finished (the paper's three runs, in turn)
+    tutor.get_by_role("button", name="Finish run", exact=True).click()
     run2 = _tutor(page, 2)
+    run2.wait_for(timeout=WIDGET_TIMEOUT_MS)
     run2.scroll_into_view_if_needed()
     assert two.clock_text() in run2.inner_text()  # e.g. "12:46 of 15:00 used"
     n2 = _n_demos(run2)
@@ -218,7 +227,9 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
     assert "not started" in text and _n_demos(run2) == n2
     run2.screenshot(path=str(artifacts / "pickplace_cap_refused.png"))
     # run 3 has 1:40 left, less than the shortest demo and the 5 attempts after it
+    run2.get_by_role("button", name="Finish run", exact=True).click()
     run3 = _tutor(page, 3)
+    run3.wait_for(timeout=WIDGET_TIMEOUT_MS)
     run3.scroll_into_view_if_needed()
     assert run3.get_by_role("button", name="Demonstrate", exact=True).is_disabled()
     run3.screenshot(path=str(artifacts / "pickplace_cap_over.png"))
