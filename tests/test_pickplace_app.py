@@ -38,6 +38,7 @@ def test_tray_shows_only_what_the_condition_shows(task, tmp_path):
     rf = PickPlaceTutor("RF", task=task, seed=0)
     rf.demonstrate(12)
     assert np.flatnonzero(tray_status(rf.run) != "unknown").tolist() == [12]
+    assert tray_status(rf.run)[12] in ("pass", "fail")  # the replay's outcome, not just ●
     assert "efficacy" not in rf.panel.value and "The robot tried plant (2, 3)" in rf.panel.value
 
     practice = PickPlaceTutor("RF", task=task, seed=0, practice=True)

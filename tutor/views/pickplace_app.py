@@ -62,9 +62,14 @@ def tray_status(run: PickPlaceRun, reveal: bool = False) -> np.ndarray:
     if rec is None:
         return status
     vis = run.visibility()
-    seen = np.arange(len(status)) if reveal else vis.shown
-    status[seen] = np.where(rec.passed[seen], "pass", "fail")
+    if reveal or vis.everything:  # the paper's good-versus-bad picture: demos in blue
+        status[:] = np.where(rec.passed, "pass", "fail")
+        status[rec.demonstrated] = "demo"
+        return status
     status[rec.demonstrated] = "demo"
+    # what the robot just tried is shown as it went, even on a demonstrated plant (RF's
+    # replay is of the plant just demonstrated)
+    status[vis.shown] = np.where(rec.passed[vis.shown], "pass", "fail")
     return status
 
 
