@@ -79,10 +79,14 @@ TRAY_STATE = """(grid) => [...grid.querySelectorAll('button')].map((b) => ({
 # ---------------------------------------------------------------- pages kept for the module
 
 
-def _run_all_cells(page, url: str, token: str, path: str) -> None:
-    """Open ``path`` on the kernel session started for it and run all its cells."""
+def _run_all_cells(page, url: str, token: str, path: str, workspace: str) -> None:
+    """Open ``path`` on the kernel session started for it and run all its cells.
+
+    The page gets a JupyterLab workspace of its own, so another page of the same server
+    (notebook 02's, on the default workspace) does not restore this notebook's tab.
+    """
     start_notebook_kernel(url, token, path)
-    page.goto(f"{url}/lab/tree/{path}?token={token}")
+    page.goto(f"{url}/lab/workspaces/{workspace}/tree/{path}?token={token}")
     page.locator(".jp-Notebook").wait_for(timeout=WIDGET_TIMEOUT_MS)
     idle = ".jp-Notebook-ExecutionIndicator[data-status='idle']"
     page.locator(idle).wait_for(timeout=WIDGET_TIMEOUT_MS)
@@ -144,7 +148,7 @@ def pickplace_page(pages, jupyterlab, workdir, artifacts):
     _write_pickplace_notebook(root / "notebooks")
     page = pages("pickplace")
     url, token = jupyterlab
-    _run_all_cells(page, url, token, PICKPLACE_NOTEBOOK)
+    _run_all_cells(page, url, token, PICKPLACE_NOTEBOOK, workspace="trainee-pickplace")
     forms = page.locator(".lfd-start-form")
     try:
         forms.nth(len(FORMS) - 1).locator(".lfd-start-go").wait_for(timeout=WIDGET_TIMEOUT_MS)
@@ -231,7 +235,7 @@ def _assert_secret(tutor, when: str) -> None:
 
 def _demonstrate(tutor, n: int) -> None:
     tutor.get_by_role("button", name="Demonstrate", exact=True).click()
-    tutor.get_by_text(re.compile(rf"demonstrations: {n}\b")).wait_for(timeout=60_000)
+    tutor.get_by_text(re.compile(rf"demonstrations: {n}(?!\d)")).wait_for(timeout=60_000)
     _plant_button(tutor, DEMO_PLANT).filter(has_text="●").wait_for(timeout=30_000)
 
 
@@ -423,7 +427,7 @@ def test_scripted_demos_never_contradict(maze_page, artifacts):
         act()
         n += change
         wait_for_demos(pad, n)
-        tutor.get_by_text(re.compile(rf"demonstrations: {n}\b")).wait_for(timeout=30_000)
+        tutor.get_by_text(re.compile(rf"demonstrations: {n}(?!\d)")).wait_for(timeout=30_000)
         lines = tutor.locator("ul.lfd-feedback li").all_inner_texts()
         summary = pad.locator(".lfd-pad-summary").inner_text()
         message = tutor.locator(".lfd-message")
@@ -468,9 +472,10 @@ def test_reset_asks_then_keeps_the_old_attempt(maze_page, artifacts):
     attempts.wait_for(state="visible", timeout=30_000)
     tutor.screenshot(path=str(artifacts / "trainee_reset_2_new_attempt.png"))
     assert "demonstrations: 0" in tutor.inner_text()
-    options = attempts.locator("option").all_inner_texts()
+    options = [o.replace("\xa0", " ") for o in attempts.locator("option").all_inner_texts()]
     assert len(options) == 1 and options[0].startswith(f"attempt 1: {n} demo(s)"), options
-    bring_back.click()  # the chosen (only) earlier attempt comes back
+    attempts.locator("select").select_option(index=0)  # choose it, then Bring back
+    bring_back.click()
     message.get_by_text("Brought back attempt 1").wait_for(timeout=30_000)
     wait_for_demos(pad, n)
     tutor.screenshot(path=str(artifacts / "trainee_reset_3_brought_back.png"))
