@@ -31,7 +31,7 @@ CONDA_NAME = {
     "build": "python-build",
 }
 # Not on conda-forge: environment.yml installs these in its `pip:` section.
-PIP_ONLY = {"gmr"}
+PIP_ONLY = {"gmr", "axe-playwright-python"}
 # Entries environment.yml may hold besides the dependencies above.
 ENV_INFRASTRUCTURE = {"python", "pip"}
 SELF_INSTALL = {"-e .", "."}

@@ -181,15 +181,12 @@ def browser():
 BENIGN_CONSOLE = ("Failed to load resource",)
 
 
-@pytest.fixture
-def page(browser, tmp_path, request):
-    """A fresh page; the test fails at teardown on any page error or console error.
+def watch_errors(pg) -> list[str]:
+    """Collect ``pg``'s page errors and console errors (see :func:`fail_on_errors`).
 
     Tests that mean to cause a console error (e.g. a dead kernel's failed websocket) set
     ``pg.allowed_console_errors`` to a tuple of substrings to tolerate.
     """
-    context = browser.new_context(viewport={"width": 1400, "height": 1000})
-    pg = context.new_page()
     errors: list[str] = []
     pg.allowed_console_errors = ()
     pg.on("pageerror", lambda exc: errors.append(f"page error: {exc}\n{exc.stack or ''}"))
@@ -203,10 +200,28 @@ def page(browser, tmp_path, request):
         errors.append(f"console error: {text} ({msg.location.get('url', '')})")
 
     pg.on("console", on_console)
-    yield pg
-    context.close()
+    return errors
+
+
+def fail_on_errors(errors: list[str], name: str) -> None:
+    """Fail (writing them to test-artifacts/page_errors_<name>.txt) if there were errors."""
     if errors:
         ARTIFACTS.mkdir(exist_ok=True)
-        log = ARTIFACTS / f"page_errors_{request.node.name}.txt"
+        log = ARTIFACTS / f"page_errors_{name}.txt"
         log.write_text("\n\n".join(errors))
         pytest.fail(f"{len(errors)} page/console error(s) (see {log.name}): {errors[0][:500]}")
+
+
+@pytest.fixture
+def page(browser, tmp_path, request):
+    """A fresh page; the test fails at teardown on any page error or console error.
+
+    Tests that mean to cause a console error set ``pg.allowed_console_errors`` (see
+    :func:`watch_errors`).
+    """
+    context = browser.new_context(viewport={"width": 1400, "height": 1000})
+    pg = context.new_page()
+    errors = watch_errors(pg)
+    yield pg
+    context.close()
+    fail_on_errors(errors, request.node.name)

@@ -127,8 +127,9 @@ class PickPlaceTutor(TutorApp):
         self.mistake = w.Dropdown(
             options=list(MISTAKES),
             value="no mistake",
-            description="",
-            layout=w.Layout(width="130px"),
+            description="Mistake",  # the select's accessible name (axe: select-name)
+            style={"description_width": "initial"},
+            layout=w.Layout(width="190px"),
         )
         self.buttons = {
             name: w.Button(description=name, layout=w.Layout(width="120px"))
