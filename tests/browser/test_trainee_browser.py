@@ -13,7 +13,7 @@ kernel starts and the cells run once):
     efficacy or efficiency (ε, η) until Finish run, which then reveals all 100 plants
     and one η;
   - three plants clicked one after another: exactly one is highlighted each time;
-  - RF's map shows the replayed plant's result (a known gap: strict xfail).
+  - RF's map shows the replayed plant's result.
 
 - **The maze** (notebook 02 as shipped): after NF is finished, the VF run gets a
   scripted series of good and bad strokes (one through an obstacle, one repeating an
@@ -256,14 +256,15 @@ def test_condition_shows_only_its_r(pickplace_page, artifacts, condition):
     tray = _tray(tutor)
     lines = tutor.locator("ul.lfd-feedback li").all_inner_texts()
     said = " ".join(lines)
-    assert tray[DEMO_PLANT]["glyph"] == "●" and "demonstrated" in tray[DEMO_PLANT]["title"]
+    replayed = condition == "RF"  # RF's r is the demonstrated plant: its result shows
+    assert tray[DEMO_PLANT]["glyph"] in ({"✓", "✗"} if replayed else {"●"}), tray[DEMO_PLANT]
+    assert "demonstrated" in tray[DEMO_PLANT]["title"]
     if condition == "NF":
         assert _revealed(tray) == set()
         assert "shows nothing" in said
     elif condition == "RF":
-        # r is the replay of the demonstrated plant: the panel gives its result; the map
-        # may show nothing else (it draws the demonstrated plant ●, see the xfail below)
-        assert _revealed(tray) <= {DEMO_PLANT}
+        # r is the replay of the demonstrated plant: the panel and the map give its result
+        assert _revealed(tray) == {DEMO_PLANT}
         assert re.search(r"The robot tried plant \(3, 4\): it (succeeds|fails)", said), said
         assert len(re.findall(r"plant \(\d+, \d+\)", said)) == 1, said
     elif condition == "BF":
@@ -328,12 +329,6 @@ def _ensure_started(page, form, artifacts):
     return tutor
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="product gap: tray_status draws every demonstrated plant ● over its pass/fail, "
-    "so RF's map never shows the replay (its r); the panel does",
-)
 def test_rf_map_shows_the_replayed_plant(pickplace_page, artifacts):
     page = pickplace_page
     tutor = _ensure_started(page, _form(page, "clicks"), artifacts)

@@ -355,6 +355,8 @@ class PickPlaceTutor(TutorApp):
             words = STATUS_WORDS[kind]
             if kind == "fail" and rec is not None:
                 words += f": {plain_reason(rec.reasons[i])}"
+            if kind in ("pass", "fail") and rec is not None and rec.demonstrated[i]:
+                words += " (demonstrated)"
             selected = i == self.selected
             tip = f"{self.task.plant_name(i)}: {words}" + (" (selected)" if selected else "")
             _set(b.style, "button_color", TRAY_COLOURS[kind])
