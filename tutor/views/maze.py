@@ -1,5 +1,10 @@
 r"""Pictures of the maze task (Sena & Howard, Experiment 1).
 
+(About 700 lines, over the project's ~600: its three pictures, the maze, the feedback
+with failure marks and the zoomed target, and the grid status, share the maze's axes,
+label placement and caption helpers; split, each module would import the others'
+private helpers.)
+
 Notation, as in :mod:`tutor.framework`:
 
 B^
