@@ -106,6 +106,11 @@ def start_and_finish_nf(page, artifacts, name: str) -> None:
         page.screenshot(path=str(ARTIFACTS / f"timeout_waiting_for_start_{name}.png"))
         raise
     go.scroll_into_view_if_needed()
+    # each test teaches as a trainee of its own (the runs of one name resume each other)
+    field = page.locator(".lfd-start-name input")
+    field.click()
+    field.fill(f"browser {name}")
+    field.press("Tab")
     page.screenshot(path=str(artifacts / f"{name}_start_form.png"))
     go.click()
     nf, pad = sketchpad_for(page, "NF")
