@@ -138,12 +138,12 @@ def _next(task, record, vis, *, rule_message: str | None, first_reached: bool) -
         return [rule_message]
     if not vis.totals:
         return []
+    if any(w.kind in (INCORRECT, AMBIGUOUS) for w in record.warnings):
+        return []  # the warning above already says what to do next (undo, move away)
     if first_reached:
         return [f"{TARGET:.0%} of the {task.condition_noun_plural} succeed: you may finish."]
     if record.efficacy >= TARGET:
         return []
-    if any(w.kind in (INCORRECT, AMBIGUOUS) for w in record.warnings):
-        return []  # the warning above already says what to do next
     for w in record.warnings:
         if w.kind == UNDEMONSTRATED:
             return [w.message]
