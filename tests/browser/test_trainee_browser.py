@@ -236,7 +236,10 @@ def _assert_secret(tutor, when: str) -> None:
 def _demonstrate(tutor, n: int) -> None:
     tutor.get_by_role("button", name="Demonstrate", exact=True).click()
     tutor.get_by_text(re.compile(rf"demonstrations: {n}(?!\d)")).wait_for(timeout=60_000)
-    _plant_button(tutor, DEMO_PLANT).filter(has_text="●").wait_for(timeout=30_000)
+    # the demonstrated plant shows ● (or, in RF, the replay's ✓ or ✗)
+    _plant_button(tutor, DEMO_PLANT).filter(has_text=re.compile("[●✓✗]")).wait_for(
+        timeout=30_000
+    )
 
 
 # ---------------------------------------------------------------- pick-and-place tests
