@@ -386,3 +386,18 @@ def test_pickplace_load_is_all_or_nothing_with_a_malformed_condition(tmp_path):
     app.load(path)
     assert "Nothing was loaded" in app.message and "demo 2" in app.message
     assert (app.run.n_demos, app.run.elapsed, app.record) == before  # the clock did not move
+
+
+def test_bring_back_offers_the_latest_earlier_attempt(tmp_path, good):
+    app = MazeTutor("VF", session_file=tmp_path / "VF.json")
+    app.add(good[0])
+    app.reset()
+    app.add(good[1])
+    app.reset()
+    assert app.attempts.value == 2  # the latest earlier attempt is chosen already
+    app.attempts.value = None
+    app.bring_back.click()
+    assert "Choose an earlier attempt" in app.message and len(app.record.attempts) == 3
+    app.attempts.value = 1
+    app.bring_back.click()
+    assert app.session.n_demos == 1 and len(app.record.attempts) == 4

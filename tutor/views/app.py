@@ -547,8 +547,11 @@ class TutorApp:
         self.status = w.HTML()
 
     def _on_bring_back(self) -> None:
-        if self.attempts.value is not None:
-            self.restore(self.attempts.value)
+        if self.attempts.value is None:
+            self.message = "Choose an earlier attempt in the list first, then press Bring back."
+            self.refresh()
+            return
+        self.restore(self.attempts.value)
 
     def _refresh_common(self) -> None:
         attempts = self.record.attempts
@@ -556,7 +559,10 @@ class TutorApp:
             (f"attempt {i}: {a.n_demos} demo(s), {a.ended or 'open'}", i)
             for i, a in enumerate(attempts[:-1], start=1)
         ]
-        self.attempts.options = earlier
+        if len(earlier) != len(self.attempts.options):
+            self.attempts.options = earlier
+            if earlier:  # a new earlier attempt: offer it, ready to bring back
+                self.attempts.value = earlier[-1][1]
         show = "flex" if earlier and not self.read_only else "none"
         self.attempts.layout.display = show
         self.bring_back.layout.display = show
