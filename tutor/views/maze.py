@@ -71,6 +71,18 @@ def _cm_axes(ax, x0, x1, y0, y1, step=0.05, pad=0.004):
     ax.tick_params(labelsize=8)
 
 
+def _target_circle(layout, zorder: float) -> Circle:
+    """The target beta, to scale (on the maze and in the zoomed inset)."""
+    return Circle(
+        tuple(layout.target_center),
+        layout.target_radius,
+        facecolor=TARGET,
+        edgecolor="black",
+        linewidth=0.6,
+        zorder=zorder,
+    )
+
+
 def _short_name(box, default):
     name = box.name or default
     return name.split(" (")[0]
@@ -160,16 +172,7 @@ def draw_maze(ax=None, layout=None, zone_label=True):
             bbox={"boxstyle": "round,pad=0.2", "fc": OBSTACLE, "ec": "none", "alpha": 0.85},
         )
     tx, ty = layout.target_center
-    ax.add_patch(
-        Circle(
-            (tx, ty),
-            layout.target_radius,
-            facecolor=TARGET,
-            edgecolor="black",
-            linewidth=0.6,
-            zorder=5,
-        )
-    )
+    ax.add_patch(_target_circle(layout, zorder=5))
     ax.annotate(
         "target β",
         (tx, ty),
@@ -527,16 +530,7 @@ def _target_inset(ax, layout, mean, passed, idx, found, demos):
                 zorder=0,
             )
         )
-    inset.add_patch(
-        Circle(
-            (tx, ty),
-            layout.target_radius,
-            facecolor=TARGET,
-            edgecolor="black",
-            linewidth=0.6,
-            zorder=1,
-        )
-    )
+    inset.add_patch(_target_circle(layout, zorder=1))
     if mean is not None and len(idx):
         _draw_realisations(inset, mean, passed, idx, linewidth=0.9, alpha=0.85, zorder=2)
         ends = mean[np.asarray(idx)[passed[idx]], -1]
