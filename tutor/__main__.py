@@ -4,12 +4,16 @@ reproduce   simulate one of the paper's experiments with simulated teachers and 
             CSV/JSON results, a text report beside the paper's numbers and the figure.
 robustness  rerun an experiment over several seeds and report how often the paper's
             conclusions hold.
+class       read a class's saved runs (a folder with one subfolder per trainee, or a zip
+            of it), list every file not counted and why, and run the paper's statistics
+            on the class beside the paper's numbers and a simulated class of its size.
 
 Examples::
 
     python -m tutor reproduce --experiment 1 --seed 0 --out results/
     python -m tutor reproduce --experiment 2 --seed 0 --out results/ --n 12
     python -m tutor robustness --experiment 1 --seeds 10 --out results/
+    python -m tutor class /srv/lfd-class --experiment 1 --out class_results/
 """
 
 from __future__ import annotations
@@ -94,11 +98,54 @@ def _parser() -> argparse.ArgumentParser:
     rob.add_argument(
         "--seeds", type=_whole_number(1), default=10, help="how many seeds (default 10)"
     )
+    cls = sub.add_parser(
+        "class", help="the paper's statistics on a class's own saved runs"
+    )
+    cls.add_argument(
+        "sessions", help="the class folder (one subfolder per trainee) or a .zip of it"
+    )
+    cls.add_argument(
+        "--experiment",
+        type=int,
+        required=True,
+        choices=(1, 2),
+        help="1 (maze) or 2 (pick-and-place)",
+    )
+    cls.add_argument("--out", default=None, help="folder for CSV, JSON, report and figure")
+    cls.add_argument(
+        "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
+    )
+    cls.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
     return parser
+
+
+def class_command(args) -> None:
+    """``lfd-tutor class``: read, analyse, print the report and (``--out``) save."""
+    from .study.class_report import analyse_class, format_class_report, save_class
+    from .study.classroom import read_class
+    from .study.report import check_out_dir
+
+    if args.out is not None:
+        check_out_dir(args.out)
+    result = read_class(args.sessions, args.experiment, workers=args.workers)
+    analysis = analyse_class(result)
+    print(format_class_report(result, analysis))
+    if args.out is not None:
+        paths = save_class(result, analysis, args.out, figures=not args.no_figures)
+        print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
 
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
+    if args.command == "class":
+        from .errors import TutorError
+
+        try:
+            class_command(args)
+        except TutorError as exc:
+            print(f"error ({type(exc).__name__}): {exc}", file=sys.stderr)
+            return 2
+        return 0
     from .errors import SaveError, TutorError
     from .study.cohort import check_request
     from .study.report import (

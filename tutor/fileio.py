@@ -32,6 +32,8 @@ __all__ = [
     "write_json",
     "read_json",
     "read_text",
+    "decode_text",
+    "parse_json",
     "read_bytes",
     "check_file_name",
     "save_error",
@@ -194,12 +196,16 @@ def read_bytes(path, what: str = "file") -> bytes:
 
 def read_text(path, what: str = "file") -> str:
     """A UTF-8 text file (a leading byte-order mark is dropped), checked as :func:`read_bytes`."""
-    data = read_bytes(path, what)
+    return decode_text(read_bytes(path, what), _shown(path), what)
+
+
+def decode_text(data: bytes, shown: str, what: str = "file") -> str:
+    """UTF-8 ``data`` as text (a byte-order mark dropped); ``shown`` names it in errors."""
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InvalidFileError(
-            f"{what} {_shown(path)} is not UTF-8 text (byte {exc.start} is not): "
+            f"{what} {shown} is not UTF-8 text (byte {exc.start} is not): "
             "is it the right file? Save it as UTF-8 text"
         ) from exc
 
@@ -261,9 +267,14 @@ def read_json(path, what: str = "file"):
     Infinity, numbers too large for a float (``1e400``, a 400-digit integer), an
     object with a key given twice, and nesting too deep to parse.
     """
-    text = read_text(path, what)
+    return parse_json(read_text(path, what), _shown(path), what)
+
+
+def parse_json(text: str, shown: str, what: str = "file"):
+    """Parse JSON ``text`` with :func:`read_json`'s checks; ``shown`` names it in errors
+    (e.g. a member of a zip file)."""
     if not text.strip():
-        raise InvalidFileError(f"{what} {_shown(path)} is empty: is it the right file?")
+        raise InvalidFileError(f"{what} {shown} is empty: is it the right file?")
     try:
         return json.loads(
             text,
@@ -273,14 +284,14 @@ def read_json(path, what: str = "file"):
             object_pairs_hook=_unique_keys,
         )
     except _Refused as exc:
-        raise InvalidFileError(f"{what} {_shown(path)}: {exc}") from exc
+        raise InvalidFileError(f"{what} {shown}: {exc}") from exc
     except RecursionError as exc:
         raise InvalidFileError(
-            f"{what} {_shown(path)} is nested too deeply to read: is it the right file?"
+            f"{what} {shown} is nested too deeply to read: is it the right file?"
         ) from exc
     except ValueError as exc:
         raise InvalidFileError(
-            f"{what} {_shown(path)} is not valid JSON (it may be truncated or corrupt): {exc}"
+            f"{what} {shown} is not valid JSON (it may be truncated or corrupt): {exc}"
         ) from exc
 
 

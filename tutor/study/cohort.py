@@ -42,6 +42,8 @@ __all__ = [
     "StudySettings",
     "run_experiment",
     "simulate_teacher",
+    "teach_runs",
+    "rows_of",
     "check_request",
     "MAX_TEACHERS",
     "min_teachers",
@@ -220,6 +222,54 @@ def run_rows(run, base: dict, ambiguity: float | None, target: float):
     return row, demo_rows
 
 
+def teach_runs(
+    experiment: int,
+    teacher: int,
+    seed: int,
+    n: int,
+    population: Population = DEFAULT_POPULATION,
+    settings: StudySettings = StudySettings(),
+):
+    """One simulated teacher's runs, in the order they are taught.
+
+    Yields ``(traits, number, run)``: the teacher's
+    :class:`~tutor.teachers.traits.TeacherTraits`, the run's number and the finished
+    :class:`~tutor.framework.run.TeachingRun` (Experiment 1: NF, VF, VR, each run 1;
+    Experiment 2: runs 1-3 of the teacher's condition, ``teacher // (n / 4)``).
+    """
+    spec = EXPERIMENTS[experiment]
+    traits = population.sample(_rng(seed, experiment, teacher, 0))
+    if experiment == 1:
+        from ..teachers.maze import MazeTeacher
+
+        model = MazeTeacher(traits, _task("maze", settings))
+        for k, cond in enumerate(spec["conditions"], start=1):
+            yield traits, 1, model.teach(cond, _rng(seed, experiment, teacher, k))
+    else:
+        from ..teachers.pickplace import PickPlaceTeacher
+
+        per = n // len(spec["conditions"])
+        cond = spec["conditions"][teacher // per]
+        model = PickPlaceTeacher(traits, _task("pickplace", settings))
+        for k in range(1, spec["runs"] + 1):
+            yield traits, k, model.teach(cond, _rng(seed, experiment, teacher, k))
+
+
+def rows_of(run, base: dict, settings: StudySettings = StudySettings()):
+    """:func:`run_rows` of a run with the study's settings, plus VR's rule compliance
+    (Experiment 1) or the clock seconds (Experiment 2)."""
+    if run.experiment == 1:
+        row, demo_rows = run_rows(run, base, None, settings.target)
+        compliance = run.compliance
+        row["followed_rules"] = (
+            float(np.mean(compliance)) if run.condition == "VR" and compliance else np.nan
+        )
+    else:
+        row, demo_rows = run_rows(run, base, settings.pickplace_ambiguity, settings.target)
+        row["seconds"] = run.elapsed
+    return row, demo_rows
+
+
 def simulate_teacher(
     experiment: int,
     teacher: int,
@@ -229,34 +279,13 @@ def simulate_teacher(
     settings: StudySettings = StudySettings(),
 ):
     """Simulate one teacher of a cohort end to end; returns (run rows, demo rows)."""
-    spec = EXPERIMENTS[experiment]
-    traits = population.sample(_rng(seed, experiment, teacher, 0))
-    trait_cols = {f"trait_{k}": v for k, v in traits.to_dict().items() if k != "plan_focus"}
     rows, demo_rows = [], []
-    if experiment == 1:
-        from ..teachers.maze import MazeTeacher
-
-        model = MazeTeacher(traits, _task("maze", settings))
-        for k, cond in enumerate(spec["conditions"], start=1):
-            run = model.teach(cond, _rng(seed, experiment, teacher, k))
-            base = {"teacher": teacher, "condition": cond, "run": 1}
-            row, drows = run_rows(run, base, None, settings.target)
-            row["followed_rules"] = float(np.mean(run.compliance)) if cond == "VR" else np.nan
-            rows.append({**row, **trait_cols})
-            demo_rows += drows
-    else:
-        from ..teachers.pickplace import PickPlaceTeacher
-
-        per = n // len(spec["conditions"])
-        cond = spec["conditions"][teacher // per]
-        model = PickPlaceTeacher(traits, _task("pickplace", settings))
-        for k in range(1, spec["runs"] + 1):
-            run = model.teach(cond, _rng(seed, experiment, teacher, k))
-            base = {"teacher": teacher, "condition": cond, "run": k}
-            row, drows = run_rows(run, base, settings.pickplace_ambiguity, settings.target)
-            row["seconds"] = run.elapsed
-            rows.append({**row, **trait_cols})
-            demo_rows += drows
+    for traits, number, run in teach_runs(experiment, teacher, seed, n, population, settings):
+        trait_cols = {f"trait_{k}": v for k, v in traits.to_dict().items() if k != "plan_focus"}
+        base = {"teacher": teacher, "condition": run.condition, "run": number}
+        row, drows = rows_of(run, base, settings)
+        rows.append({**row, **trait_cols})
+        demo_rows += drows
     return rows, demo_rows
 
 

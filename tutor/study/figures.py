@@ -12,7 +12,7 @@ import pandas as pd
 
 from . import paper
 
-__all__ = ["experiment1_figure", "experiment2_figure", "PAPER_MARK"]
+__all__ = ["experiment1_figure", "experiment2_figure", "PAPER_MARK", "REFERENCE_MARK"]
 
 PAPER_MARK = {"marker": "D", "color": "#d62728", "s": 40, "zorder": 5}
 BOX = {"patch_artist": True, "widths": 0.55, "medianprops": {"color": "#d62728", "lw": 2}}
@@ -35,8 +35,17 @@ def _boxes(ax, runs, column, conds, colour="#9ecae1"):
         ax.scatter(i + rng.uniform(-0.12, 0.12, len(d)), d, s=9, color="#08519c", alpha=0.6)
 
 
-def experiment1_figure(runs: pd.DataFrame):
+#: how a reference cohort's numbers are marked (e.g. a simulated class of the same size)
+REFERENCE_MARK = {"marker": "^", "color": "#636363", "s": 40, "zorder": 5}
+
+
+def experiment1_figure(
+    runs: pd.DataFrame, who: str = "simulated teachers", reference: pd.DataFrame | None = None
+):
     """Experiment 1: eta per condition (box plots, paper's medians marked), demos, efficacy.
+
+    ``who`` names the teachers in the title; ``reference`` (another ``runs`` frame, e.g. a
+    simulated cohort of the class's size) has its medians marked beside the paper's.
 
     Returns
     -------
@@ -50,8 +59,16 @@ def experiment1_figure(runs: pd.DataFrame):
     ax.scatter(
         range(1, len(conds) + 1), [med[c] for c in conds], label="paper's median", **PAPER_MARK
     )
+    if reference is not None and len(reference):
+        ref = reference.groupby("condition", observed=True)["eta"].median()
+        ax.scatter(
+            np.arange(1, len(conds) + 1) + 0.3,
+            [ref.get(c, np.nan) for c in conds],
+            label=f"simulated median ({reference.teacher.nunique()} teachers)",
+            **REFERENCE_MARK,
+        )
     ax.set_ylabel("teaching efficiency η (at 90 % coverage)")
-    ax.set_title(f"η per condition ({runs.teacher.nunique()} simulated teachers)")
+    ax.set_title(f"η per condition ({runs.teacher.nunique()} {who})")
     ax.legend(loc="upper left", fontsize=8)
     _boxes(axes[1], runs, "n_demos", conds, "#c7e9c0")
     axes[1].set_ylabel("demonstrations given")
@@ -63,8 +80,13 @@ def experiment1_figure(runs: pd.DataFrame):
     return fig
 
 
-def experiment2_figure(runs: pd.DataFrame):
+def experiment2_figure(
+    runs: pd.DataFrame, who: str = "simulated teachers", reference: pd.DataFrame | None = None
+):
     """Experiment 2: mean eta per run and overall per condition, the paper's beside it.
+
+    ``who`` and ``reference`` as in :func:`experiment1_figure` (the reference's mean η is
+    marked).
 
     Returns
     -------
@@ -99,9 +121,17 @@ def experiment2_figure(runs: pd.DataFrame):
         label="paper: run 3",
         **{**PAPER_MARK, "marker": "x"},
     )
+    if reference is not None and len(reference):
+        ref = reference.groupby("condition", observed=True)["eta"].mean()
+        ax.scatter(
+            x + (n_runs / 2) * width,
+            [ref.get(c, np.nan) for c in conds],
+            label=f"simulated: mean ({reference.teacher.nunique()} teachers)",
+            **REFERENCE_MARK,
+        )
     ax.set_xticks(x, conds)
     ax.set_ylabel("mean teaching efficiency η")
-    ax.set_title(f"η̄ per run and overall ({runs.teacher.nunique()} simulated teachers)")
+    ax.set_title(f"η̄ per run and overall ({runs.teacher.nunique()} {who})")
     ax.legend(fontsize=8, ncol=2)
     ax = axes[1]
     sums = runs.groupby("condition", observed=True)[["errors", "undemonstrated", "ambiguous"]]
@@ -133,6 +163,6 @@ def experiment2_figure(runs: pd.DataFrame):
         )
     ax.set_xticks(xk, ["demonstration\nerrors", "undemonstrated\nstates", "ambiguous\ndemos"])
     ax.set_ylabel("share of all failures of that kind")
-    ax.set_title("Failures by condition (bars: simulation, black: paper)")
+    ax.set_title(f"Failures by condition (bars: {who}, black: paper)")
     ax.legend(fontsize=8)
     return fig

@@ -1,0 +1,370 @@
+"""A class's results beside the paper's and beside a simulated class of the same size.
+
+:func:`analyse_class` runs the paper's statistics on a :class:`~.classroom.ClassResult`
+(the same functions as the simulated cohorts, :mod:`tutor.study.stats`):
+
+- Experiment 1: repeated-measures ANOVA of η over NF, VF, VR with Mauchly's sphericity
+  check, then paired t-tests (Bonferroni), on the trainees who did all three;
+- Experiment 2: mixed ANOVA (condition between, run within), then Welch t-tests of the
+  trainees' mean η, on the trainees who did all three runs; the failure-count table.
+
+A class too small for a test (fewer than :data:`MIN_PER_CONDITION` whole trainees in a
+condition) gets descriptive numbers and a plain sentence saying why there is no test.
+
+The comparison cohort is drawn from the paper-sized simulated cohorts bundled with the
+tutor (:data:`tutor.study.report.BUNDLED`): as many simulated teachers per condition as
+the class has whole trainees, chosen at random with a fixed seed, so it shows what a
+class of this size may give by chance alone when teachers behave like the simulation.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .. import paper
+from ..errors import SaveError
+from . import stats
+from .classroom import ClassResult
+from .cohort import EXPERIMENTS
+from .report import _jsonable, check_out_dir, load_result
+
+__all__ = [
+    "MIN_PER_CONDITION",
+    "analyse_class",
+    "format_class_report",
+    "save_class",
+    "same_size_cohort",
+    "descriptive_table",
+]
+
+#: the fewest whole trainees per condition for the paper's tests (below it: description only)
+MIN_PER_CONDITION = 3
+
+
+def _counts(runs: pd.DataFrame, experiment: int) -> dict[str, int]:
+    conditions = EXPERIMENTS[experiment]["conditions"]
+    if runs.empty:
+        return dict.fromkeys(conditions, 0)
+    per = runs.groupby("condition", observed=False)["teacher"].nunique()
+    return {c: int(per.get(c, 0)) for c in conditions}
+
+
+def too_small(runs: pd.DataFrame, experiment: int) -> str:
+    """Why the paper's tests cannot be run on ``runs`` (whole trainees only), or ""."""
+    counts = _counts(runs, experiment)
+    short = {c: k for c, k in counts.items() if k < MIN_PER_CONDITION}
+    if not short:
+        return ""
+    have = ", ".join(f"{c} {k}" for c, k in counts.items())
+    design = (
+        "every trainee teaches NF, VF and VR"
+        if experiment == 1
+        else "each trainee teaches three runs of one condition"
+    )
+    return (
+        f"the class is too small for the paper's tests: they need at least "
+        f"{MIN_PER_CONDITION} trainees per condition who finished every run ({design}), "
+        f"and it has {have}. The numbers below describe the class; they test nothing."
+    )
+
+
+def descriptive_table(runs: pd.DataFrame, experiment: int) -> pd.DataFrame:
+    """Per condition: trainees, runs, η (median, mean), demos, ε, and the failures."""
+    conditions = list(EXPERIMENTS[experiment]["conditions"])
+    if runs.empty:
+        return pd.DataFrame(index=conditions, columns=["trainees", "runs"]).fillna(0)
+    g = runs.groupby("condition", observed=False)
+    table = pd.DataFrame(
+        {
+            "trainees": g["teacher"].nunique(),
+            "runs": g.size(),
+            "median eta": g["eta"].median(),
+            "mean eta": g["eta"].mean(),
+            "mean demos": g["n_demos"].mean(),
+            "mean efficacy": g["efficacy"].mean(),
+            "errors": g["errors"].sum(),
+            "undemonstrated": g["undemonstrated"].sum(),
+            "ambiguous": g["ambiguous"].sum(),
+        }
+    )
+    if experiment == 1:
+        table["reached 90 %"] = g["reached_target"].sum()
+    else:
+        table["mean minutes"] = g["seconds"].mean() / 60
+    return table.reindex(conditions)
+
+
+def same_size_cohort(class_runs: pd.DataFrame, experiment: int, seed: int = 0) -> pd.DataFrame:
+    """Runs of simulated teachers, as many per condition as ``class_runs`` has trainees.
+
+    Drawn without replacement from the bundled paper-sized cohort (30 or 36 teachers; at
+    most 9 per condition in Experiment 2), with a fixed seed.
+    """
+    bundled = load_result(experiment).runs
+    rng = np.random.default_rng(seed)
+    counts = _counts(class_runs, experiment)
+    if experiment == 1:
+        pool = np.sort(bundled.teacher.unique())
+        k = min(max(counts.values(), default=0), len(pool))
+        chosen = rng.choice(pool, size=k, replace=False)
+    else:
+        chosen = []
+        for cond, k in counts.items():
+            pool = np.sort(bundled.loc[bundled.condition == cond, "teacher"].unique())
+            chosen += list(rng.choice(pool, size=min(k, len(pool)), replace=False))
+    return bundled[bundled.teacher.isin(chosen)].reset_index(drop=True)
+
+
+def _tests(runs: pd.DataFrame, experiment: int) -> dict:
+    """The paper's statistics on whole trainees' runs, or why there are none."""
+    why = too_small(runs, experiment)
+    if why:
+        return {"tested": False, "why_not": why}
+    st = stats.experiment1_stats(runs) if experiment == 1 else stats.experiment2_stats(runs)
+    return {
+        "tested": True,
+        "why_not": "",
+        "stats": st,
+        "relative": stats.relative_improvement(st, experiment),
+        "conclusions": stats.conclusions(runs, experiment, st),
+    }
+
+
+def analyse_class(result: ClassResult, seed: int = 0) -> dict:
+    """Statistics, tables and the comparisons of a class (see the module docstring).
+
+    Returns
+    -------
+    dict
+        ``descriptive`` (all counted runs), ``failures`` (the paper's table, all counted
+        runs), ``class`` (tests on whole trainees: ``tested``, ``why_not``, ``stats``,
+        ``relative``, ``conclusions``), ``simulated`` (the same for the same-size
+        simulated cohort, with its ``runs``), ``beside`` (class, paper and simulated η per
+        condition).
+    """
+    exp = result.experiment
+    whole = result.complete_runs
+    simulated_runs = same_size_cohort(whole, exp, seed)
+    out = {
+        "descriptive": descriptive_table(result.runs, exp),
+        "failures": stats.failure_table(result.runs) if not result.runs.empty else None,
+        "class": _tests(whole, exp),
+        "simulated": {**_tests(simulated_runs, exp), "runs": simulated_runs},
+    }
+    conditions = list(EXPERIMENTS[exp]["conditions"])
+    measure = "median eta" if exp == 1 else "mean eta"
+    ref = paper.EXPERIMENT_1["median_eta"] if exp == 1 else paper.EXPERIMENT_2["mean_eta"]
+    sim = descriptive_table(simulated_runs, exp)
+    out["beside"] = pd.DataFrame(
+        {
+            "trainees": out["descriptive"]["trainees"],
+            f"{measure} (class)": out["descriptive"].get(measure),
+            f"{measure} (paper)": [ref[c] for c in conditions],
+            f"{measure} (simulated, same size)": sim.get(measure),
+            "simulated teachers": sim["trainees"],
+        },
+        index=conditions,
+    )
+    out["measure"] = measure
+    return out
+
+
+# ---------------------------------------------------------------- the report
+
+
+def _pct(x) -> str:
+    return "n/a" if x is None or not np.isfinite(x) else f"{100 * x:.1f} %"
+
+
+def _test_lines(tests: dict, experiment: int, who: str) -> list[str]:
+    if not tests["tested"]:
+        return [f"{who}: no test — {tests['why_not']}"]
+    st, lines = tests["stats"], []
+    if experiment == 1:
+        a, pa = st["anova"], paper.EXPERIMENT_1["anova"]
+        sph = "holds" if a["sphericity_ok"] else "violated: Greenhouse-Geisser p used"
+        lines.append(
+            f"{who}: repeated-measures ANOVA F({a['ddof1']},{a['ddof2']}) = {a['F']:.3f}, "
+            f"p = {a['p_used']:.3g}   (paper: F({pa['ddof1']},{pa['ddof2']}) = {pa['F']}, "
+            f"p = {pa['p']})"
+        )
+        lines.append(
+            f"  Mauchly's sphericity: W = {a['sphericity_W']:.3f}, p = "
+            f"{a['sphericity_p']:.3g} ({sph})"
+        )
+        for _, r in st["pairwise"].iterrows():
+            pp = paper.EXPERIMENT_1["pairwise_p"].get((r.A, r.B), float("nan"))
+            lines.append(
+                f"  {r.A}-{r.B}: paired t = {r['T']:.2f}, Bonferroni p = {r.p_bonf:.3g}   "
+                f"(paper p = {pp})"
+            )
+    else:
+        a, pa = st["anova"], paper.EXPERIMENT_2["mixed_anova"]
+        for key in ("condition", "run", "interaction"):
+            r, ref = a[key], pa[key]
+            ref_text = (
+                f"F({ref['ddof1']},{ref['ddof2']}) = {ref['F']}, p = {ref['p']}"
+                if isinstance(ref, dict)
+                else ref
+            )
+            lines.append(
+                f"{who}: mixed ANOVA, {key}: F({r['ddof1']},{r['ddof2']}) = {r['F']:.3f}, "
+                f"p = {r['p']:.3g}   (paper: {ref_text})"
+            )
+        for _, r in st["pairwise"].iterrows():
+            lines.append(
+                f"  {r.A}-{r.B}: Welch t = {r['T']:.2f}, Bonferroni p = {r.p_bonf:.3g}"
+            )
+    lines.append(
+        "  the paper's conclusions: "
+        + "; ".join(f"{k} {'holds' if v else 'does not hold'}" for k, v in
+                    tests["conclusions"].items())
+    )
+    return lines
+
+
+def format_class_report(result: ClassResult, analysis: dict) -> str:
+    """Plain-text report of a class: what was counted, the numbers, the files left out."""
+    exp = result.experiment
+    trainees = result.trainees
+    counted = int((trainees.counted_runs > 0).sum()) if len(trainees) else 0
+    whole = int(trainees.complete.sum()) if len(trainees) else 0
+    task = "maze" if exp == 1 else "pick-and-place"
+    lines = [
+        f"Experiment {exp} ({task}) of the class in {result.source}",
+        f"{len(result.runs)} runs counted from {counted} trainees; {whole} trainees "
+        f"finished every {'condition' if exp == 1 else 'run'}.",
+        "",
+    ]
+    if result.runs.empty:
+        lines.append(
+            "No finished run of this experiment was found, so there is nothing to analyse yet."
+        )
+    else:
+        fmt = {"float_format": lambda v: f"{v:.3f}", "na_rep": "–"}
+        lines.append(f"The class's {analysis['measure']} beside the paper's and a simulated")
+        lines.append("class of the same size (drawn from the bundled simulated cohort):")
+        lines.append(analysis["beside"].to_string(**fmt))
+        lines.append("")
+        lines.append("Per condition (every counted run):")
+        lines.append(analysis["descriptive"].to_string(**fmt))
+        lines.append("")
+        lines += _test_lines(analysis["class"], exp, "This class")
+        lines += _test_lines(analysis["simulated"], exp, "Simulated, same size")
+        if exp == 2 and analysis["failures"] is not None:
+            fail = analysis["failures"]
+            ref = pd.DataFrame(paper.EXPERIMENT_2["failures"]).T[fail.columns]
+            lines.append("")
+            lines.append("Failures over all counted runs: class (paper)")
+            lines.append((fail.astype(str) + " (" + ref.astype(str) + ")").to_string())
+    lacking = trainees[~trainees.complete] if len(trainees) else trainees
+    if len(lacking):
+        lines.append("")
+        lines.append(f"Trainees with runs still to finish ({len(lacking)}):")
+        for _, t in lacking.iterrows():
+            lines.append(f"  {t.trainee} ({t.trainee_key}): missing {t.missing}")
+    problems = result.not_counted
+    lines.append("")
+    if problems:
+        lines.append(f"Files not counted ({len(problems)}):")
+        for f in problems:
+            lines.append(f"  {f.file}: {f.kind} — {f.reason}")
+    else:
+        lines.append("Every run file of this experiment was counted.")
+    others = result.other_experiment
+    if others:
+        other = 2 if exp == 1 else 1
+        lines.append(
+            f"{len(others)} files of Experiment {other} were set aside: read them with "
+            f"--experiment {other}."
+        )
+    return "\n".join(lines)
+
+
+def _class_json(result: ClassResult, analysis: dict) -> dict:
+    trainees = []
+    for _, t in result.trainees.iterrows():
+        mine = [f for f in result.files if f.trainee_key == t.trainee_key]
+        trainees.append(
+            {
+                "key": t.trainee_key,
+                "name": t.trainee,
+                "complete": bool(t.complete),
+                "missing": t.missing,
+                "runs": [
+                    {k: v for k, v in f.to_dict().items() if k not in ("trainee", "trainee_key")}
+                    for f in mine
+                    if f.kind != "other experiment"
+                ],
+            }
+        )
+    tests = {
+        who: {k: v for k, v in analysis[who].items() if k != "runs"}
+        for who in ("class", "simulated")
+    }
+    return {
+        "experiment": result.experiment,
+        "source": result.source,
+        "n_runs_counted": len(result.runs),
+        "trainees": trainees,
+        "skipped": [f.to_dict() for f in result.not_counted],
+        "other_experiment": [f.file for f in result.other_experiment],
+        "beside": _jsonable(analysis["beside"]),
+        "descriptive": _jsonable(analysis["descriptive"]),
+        "failures": None if analysis["failures"] is None else _jsonable(analysis["failures"]),
+        **_jsonable(tests),
+    }
+
+
+def class_figure(result: ClassResult, analysis: dict):
+    """The paper-style figure of the class, the simulated same-size medians/means marked."""
+    from .figures import experiment1_figure, experiment2_figure
+
+    draw = experiment1_figure if result.experiment == 1 else experiment2_figure
+    return draw(result.runs, who="trainees", reference=analysis["simulated"]["runs"])
+
+
+def save_class(result: ClassResult, analysis: dict, out, figures: bool = True) -> dict:
+    """Write ``class_runs.csv``, ``class_demos.csv``, ``class_files.csv``, ``class.json``,
+    ``class_report.txt`` and (``figures``, with runs) ``class_experiment<N>.png``.
+
+    Returns a dict of the paths written.
+
+    Raises
+    ------
+    SaveError
+        ``out`` cannot be made or written.
+    """
+    out = check_out_dir(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SaveError(f"cannot make the output folder {out}: {exc.strerror or exc}") from exc
+    paths = {
+        "runs": out / "class_runs.csv",
+        "demos": out / "class_demos.csv",
+        "files": out / "class_files.csv",
+        "summary": out / "class.json",
+        "report": out / "class_report.txt",
+    }
+    try:
+        result.runs.to_csv(paths["runs"], index=False)
+        result.demos.to_csv(paths["demos"], index=False)
+        pd.DataFrame([f.to_dict() for f in result.files]).to_csv(paths["files"], index=False)
+        text = json.dumps(_class_json(result, analysis), indent=2, default=str)
+        Path(paths["summary"]).write_text(text, encoding="utf-8")
+        paths["report"].write_text(format_class_report(result, analysis) + "\n", "utf-8")
+        if figures and not result.runs.empty:
+            import matplotlib.pyplot as plt
+
+            fig = class_figure(result, analysis)
+            paths["figure"] = out / f"class_experiment{result.experiment}.png"
+            fig.savefig(paths["figure"], dpi=110)
+            plt.close(fig)
+    except OSError as exc:
+        raise SaveError(f"cannot write the class results in {out}: {exc.strerror or exc}") from exc
+    return paths

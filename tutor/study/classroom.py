@@ -1,0 +1,514 @@
+"""A class's own runs read back: every trainee's saved run records, checked and scored.
+
+The tutor saves each teaching run as a run record (:mod:`tutor.framework.record`) in
+the trainee's folder. :func:`read_class` reads a whole class: a folder tree (one
+subfolder per trainee, at any depth, as a hub's class folder or the collected
+``sessions/`` folders give it) or a zip of one. Each file is checked in turn, and a
+file that cannot be used is listed with the reason, never counted silently and never
+allowed to stop the others:
+
+- it cannot be read (not JSON, not UTF-8, too large, truncated ...);
+- it is not a run record (another format, a newer version, a field out of range);
+- its demonstrations cannot be replayed by this tutor's learner;
+- it is a practice run, or its current attempt is not finished;
+- it repeats a run another file already holds (the finished, latest one is counted).
+
+Files of the other experiment are set aside (``other_experiment``), not reported as
+problems; hidden files (``.NF.lock``, temporary files) and files that are not ``.json``
+are not looked at.
+
+Every counted run is replayed through the same learner and scored by the same
+function as the simulated cohorts (:func:`tutor.study.cohort.rows_of`), so the class's
+rows have the cohort's columns (``teacher`` is the trainee's number in the class, and
+``trainee``, ``trainee_key`` and ``file`` say whose run it is).
+
+Examples
+--------
+>>> result = read_class("class_folder/", experiment=1)      # doctest: +SKIP
+>>> result.runs.groupby("condition").eta.median()           # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import os
+import zipfile
+from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field, replace
+from pathlib import Path, PurePosixPath
+
+import pandas as pd
+
+from ..errors import InvalidFileError, InvalidParameterError, TutorError
+from ..fileio import MAX_FILE_BYTES, decode_text, megabytes, parse_json, read_json
+from ..framework.record import RunRecord
+from .cohort import EXPERIMENTS, StudySettings, _limit_threads, _task, rows_of
+
+__all__ = [
+    "ClassResult",
+    "FileOutcome",
+    "RUN_CLASSES",
+    "read_class",
+    "PROBLEMS",
+]
+
+#: the reasons a file is not counted (``FileOutcome.kind``), in the order reports list them
+PROBLEMS = (
+    "unreadable",
+    "not a run record",
+    "cannot be replayed",
+    "duplicate",
+    "practice",
+    "unfinished",
+)
+
+
+def _run_class(experiment: int):
+    if experiment == 1:
+        from ..tasks.maze_run import MazeRun
+
+        return MazeRun
+    from ..tasks.pickplace_protocol import PickPlaceRun
+
+    return PickPlaceRun
+
+
+#: experiment -> a function giving its TeachingRun subclass (imported on first use)
+RUN_CLASSES = {1: lambda: _run_class(1), 2: lambda: _run_class(2)}
+
+
+@dataclass(frozen=True)
+class FileOutcome:
+    """What became of one file of the class.
+
+    Attributes
+    ----------
+    file : str
+        Its path relative to the class folder (or inside the zip).
+    kind : str
+        ``"counted"``, ``"other experiment"`` or one of :data:`PROBLEMS`.
+    reason : str
+        In plain words, with what to do when it is a problem.
+    trainee, trainee_key, condition, run, n_demos, finished, practice
+        What the record says (empty when it could not be read).
+    """
+
+    file: str
+    kind: str
+    reason: str = ""
+    trainee: str = ""
+    trainee_key: str = ""
+    condition: str = ""
+    run: int = 0
+    n_demos: int = 0
+    finished: bool = False
+    practice: bool = False
+
+    @property
+    def counted(self) -> bool:
+        return self.kind == "counted"
+
+    def to_dict(self) -> dict:
+        return {
+            "file": self.file,
+            "kind": self.kind,
+            "reason": self.reason,
+            "trainee": self.trainee,
+            "trainee_key": self.trainee_key,
+            "condition": self.condition,
+            "run": self.run,
+            "n_demos": self.n_demos,
+            "finished": self.finished,
+            "practice": self.practice,
+            "counted": self.counted,
+        }
+
+
+@dataclass
+class ClassResult:
+    """A class read back by :func:`read_class`.
+
+    Attributes
+    ----------
+    experiment : int
+    source : str
+        The folder or zip that was read.
+    runs : pandas.DataFrame
+        One row per counted run, with the simulated cohort's columns (see the module).
+    demos : pandas.DataFrame
+        One row per demonstration of each counted run.
+    files : list of FileOutcome
+        Every run file looked at, counted or not, in path order.
+    """
+
+    experiment: int
+    source: str
+    runs: pd.DataFrame
+    demos: pd.DataFrame
+    files: list[FileOutcome] = field(default_factory=list)
+    settings: StudySettings = field(default_factory=StudySettings)
+
+    @property
+    def not_counted(self) -> list[FileOutcome]:
+        """The files of this experiment that were not counted, each with its reason."""
+        return [f for f in self.files if f.kind in PROBLEMS]
+
+    @property
+    def other_experiment(self) -> list[FileOutcome]:
+        return [f for f in self.files if f.kind == "other experiment"]
+
+    @property
+    def trainees(self) -> pd.DataFrame:
+        """One row per trainee with a file of this experiment: key, name, counted runs,
+        demos in them, runs not counted and what the trainee still lacks."""
+        conditions = EXPERIMENTS[self.experiment]["conditions"]
+        want_runs = EXPERIMENTS[self.experiment]["runs"]
+        mine = [f for f in self.files if f.trainee_key and f.kind != "other experiment"]
+        rows = []
+        for key in sorted({f.trainee_key for f in mine}):
+            theirs = [f for f in mine if f.trainee_key == key]
+            counted = [f for f in theirs if f.counted]
+            names = Counter(f.trainee for f in theirs)
+            if self.experiment == 1:
+                done = {f.condition for f in counted}
+                lacking = [c for c in conditions if c not in done]
+                missing = ", ".join(lacking)
+            else:
+                runs_by_condition = Counter(f.condition for f in counted)
+                if len(runs_by_condition) > 1:
+                    missing = "runs in more than one condition: " + ", ".join(
+                        sorted(runs_by_condition)
+                    )
+                else:
+                    have = {f.run for f in counted}
+                    lacking = [str(r) for r in range(1, want_runs + 1) if r not in have]
+                    missing = ("run " + ", ".join(lacking)) if lacking else ""
+            rows.append(
+                {
+                    "trainee_key": key,
+                    "trainee": names.most_common(1)[0][0],
+                    "counted_runs": len(counted),
+                    "demos": sum(f.n_demos for f in counted),
+                    "not_counted": len(theirs) - len(counted),
+                    "missing": missing,
+                    "complete": not missing,
+                }
+            )
+        return pd.DataFrame(
+            rows,
+            columns=[
+                "trainee_key",
+                "trainee",
+                "counted_runs",
+                "demos",
+                "not_counted",
+                "missing",
+                "complete",
+            ],
+        )
+
+    @property
+    def complete_runs(self) -> pd.DataFrame:
+        """The rows of trainees who did every condition (Exp. 1) or all runs (Exp. 2):
+        the within-subject tests need them whole."""
+        if self.runs.empty:
+            return self.runs
+        table = self.trainees
+        whole = set(table.loc[table.complete, "trainee_key"])
+        return self.runs[self.runs.trainee_key.isin(whole)].reset_index(drop=True)
+
+
+# ---------------------------------------------------------------- finding the files
+
+
+def _hidden(parts) -> bool:
+    return any(p.startswith(".") or p == "__MACOSX" for p in parts)
+
+
+def _folder_files(root: Path) -> list[str]:
+    """The ``.json`` files under ``root`` that are not hidden, as relative POSIX paths."""
+    found = []
+    for dirpath, dirnames, filenames in os.walk(root):
+        dirnames[:] = sorted(d for d in dirnames if not _hidden([d]))
+        for name in sorted(filenames):
+            if not name.startswith(".") and name.lower().endswith(".json"):
+                found.append((Path(dirpath) / name).relative_to(root).as_posix())
+    return sorted(found)
+
+
+def _zip_files(archive: zipfile.ZipFile) -> list[str]:
+    names = []
+    for info in archive.infolist():
+        parts = PurePosixPath(info.filename).parts
+        if not (info.is_dir() or _hidden(parts)) and info.filename.lower().endswith(".json"):
+            names.append(info.filename)
+    return sorted(names)
+
+
+def _read_member(archive_path: str, name: str):
+    shown = f"{name} (in the zip)"
+    try:
+        with zipfile.ZipFile(archive_path) as archive:
+            info = archive.getinfo(name)
+            if info.file_size > MAX_FILE_BYTES:
+                raise InvalidFileError(
+                    f"run file {shown} is {megabytes(info.file_size)}, more than a run "
+                    f"record can be ({megabytes(MAX_FILE_BYTES)}): is it the right file?"
+                )
+            with archive.open(info) as member:
+                data = member.read(MAX_FILE_BYTES + 1)
+    except (zipfile.BadZipFile, OSError, RuntimeError, ValueError, KeyError) as exc:
+        raise InvalidFileError(f"run file {shown} cannot be unpacked: {exc}") from exc
+    if len(data) > MAX_FILE_BYTES:
+        raise InvalidFileError(f"run file {shown} is larger than it says: is it the right file?")
+    return parse_json(decode_text(data, shown, "run file"), shown, "run file")
+
+
+def _read(item):
+    """Worker: read and check one file; ``item`` is (source, is_zip, label, experiment)."""
+    source, is_zip, label, experiment = item
+    if is_zip:
+        return _check(label, lambda: _read_member(source, label), experiment)
+    return _check(label, lambda: read_json(Path(source) / label, "run file"), experiment)
+
+
+# ---------------------------------------------------------------- one file
+
+
+def _summary(record: RunRecord) -> dict:
+    return {
+        "trainee": record.trainee.name,
+        "trainee_key": record.trainee.key,
+        "condition": record.condition,
+        "run": record.run,
+        "n_demos": record.current.n_demos,
+        "finished": record.finished,
+        "practice": record.practice,
+    }
+
+
+def _sentence(text: str) -> str:
+    text = str(text).strip()
+    return text if text.endswith((".", "!", "?")) else text + "."
+
+
+ASK_AGAIN = "Ask the trainee for the run file again (from their folder in the class folder)."
+
+
+def _check(label: str, read, experiment: int):
+    """(FileOutcome, record or None): every check short of replaying the demos."""
+    try:
+        data = read()
+    except TutorError as exc:
+        return FileOutcome(label, "unreadable", f"{_sentence(exc)} {ASK_AGAIN}"), None
+    try:
+        record = RunRecord.from_dict(data)
+    except TutorError as exc:
+        return FileOutcome(label, "not a run record", f"{_sentence(exc)} {ASK_AGAIN}"), None
+    info = _summary(record)
+    if record.experiment != experiment:
+        reason = f"an Experiment {record.experiment} run: read it with --experiment "
+        return FileOutcome(label, "other experiment", reason + str(record.experiment), **info), None
+    spec = EXPERIMENTS[experiment]
+    if record.condition not in spec["conditions"] or record.task != spec["task"]:
+        return (
+            FileOutcome(
+                label,
+                "not a run record",
+                f"its task {record.task!r} and condition {record.condition!r} are not "
+                f"Experiment {experiment}'s ({spec['task']}: {', '.join(spec['conditions'])})",
+                **info,
+            ),
+            None,
+        )
+    if record.practice:
+        return (
+            FileOutcome(label, "practice", "a practice run: practice is never counted", **info),
+            None,
+        )
+    return FileOutcome(label, "counted", "", **info), record
+
+
+def _replay(item):
+    """Worker: replay one record; gives (label, kind, reason, run row, demo rows)."""
+    label, record, experiment, settings = item
+    spec = EXPERIMENTS[experiment]
+    try:
+        run = RUN_CLASSES[experiment]().from_record(_task(spec["task"], settings), record)
+    except TutorError as exc:
+        reason = (
+            f"{_sentence(exc)} The tutor's learner cannot use it (was it edited by hand?). "
+            + ASK_AGAIN
+        )
+        return label, "cannot be replayed", reason, None, []
+    if not run.finished:
+        reason = (
+            f"not finished ({run.n_demos} demonstrations so far): the trainee has not "
+            "pressed Finish, so it is not counted yet"
+        )
+        return label, "unfinished", reason, None, []
+    base = {"condition": record.condition, "run": record.run}
+    row, demo_rows = rows_of(run, base, settings)
+    return label, "counted", "", row, demo_rows
+
+
+def _latest(record: RunRecord) -> str:
+    return record.events[-1].at if record.events else record.created
+
+
+# ---------------------------------------------------------------- a class
+
+
+def read_class(
+    source, experiment: int, workers: int | None = None, settings: StudySettings | None = None
+) -> ClassResult:
+    """Read and score every run record of a class (see the module docstring).
+
+    Parameters
+    ----------
+    source : path
+        The class folder (one subfolder per trainee) or a ``.zip`` of it.
+    experiment : {1, 2}
+    workers : int, optional
+        Processes that replay the runs (default: the machine's cores); 1 works here.
+    settings : StudySettings, optional
+        The analysis settings (default: the simulated cohorts' own).
+
+    Returns
+    -------
+    ClassResult
+
+    Raises
+    ------
+    InvalidParameterError
+        ``experiment`` is not 1 or 2, or ``workers`` is not a whole number >= 1.
+    InvalidFileError
+        ``source`` is neither a folder nor a readable zip file.
+    """
+    if isinstance(experiment, bool) or experiment not in EXPERIMENTS:
+        raise InvalidParameterError(
+            f"experiment must be 1 (maze) or 2 (pick-and-place), got {experiment!r}"
+        )
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
+    ):
+        raise InvalidParameterError(f"workers must be a whole number >= 1, got {workers!r}")
+    settings = StudySettings() if settings is None else settings
+    path = Path(source)
+    if path.is_dir():
+        labels, is_zip = _folder_files(path), False
+    elif path.is_file() and zipfile.is_zipfile(path):
+        try:
+            with zipfile.ZipFile(path) as archive:
+                labels, is_zip = _zip_files(archive), True
+        except (zipfile.BadZipFile, OSError) as exc:
+            raise InvalidFileError(f"the zip file {path} cannot be read: {exc}") from exc
+    elif path.exists():
+        raise InvalidFileError(
+            f"{path} is neither a folder nor a zip file: give the class folder (one "
+            "subfolder per trainee) or a zip of it"
+        )
+    else:
+        raise InvalidFileError(
+            f"there is no folder or zip file at {path}: give the class folder (on a hub, "
+            "the folder the kit keeps every trainee's runs in, e.g. /srv/lfd-class)"
+        )
+    workers = min(os.cpu_count() or 1, max(1, len(labels))) if workers is None else workers
+    with _Pool(workers) as pool:
+        outcomes = pool.map(_read, [(str(path), is_zip, lab, experiment) for lab in labels])
+        return _score(path, experiment, outcomes, pool, settings)
+
+
+class _Pool:
+    """``map`` over worker processes (or here, for one worker), results in order."""
+
+    def __init__(self, workers: int):
+        self.workers, self._pool = workers, None
+
+    def __enter__(self):
+        if self.workers > 1:
+            import multiprocessing as mp
+
+            ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+            self._pool = ProcessPoolExecutor(
+                self.workers, mp_context=ctx, initializer=_limit_threads
+            )
+        else:
+            _limit_threads()
+        return self
+
+    def map(self, fn, items) -> list:
+        if self._pool is None or len(items) < 2:
+            return [fn(item) for item in items]
+        chunk = max(1, len(items) // (4 * self.workers))
+        return list(self._pool.map(fn, items, chunksize=chunk))
+
+    def __exit__(self, *exc):
+        if self._pool is not None:
+            self._pool.shutdown()
+
+
+def _duplicates(outcomes) -> dict[str, str]:
+    """label -> the label of the file counted instead, for files repeating a run."""
+    groups: dict[tuple, list] = {}
+    for outcome, record in outcomes:
+        if record is not None:
+            key = (record.trainee.key, record.condition, record.run)
+            groups.setdefault(key, []).append((outcome, record))
+    beaten = {}
+    for members in groups.values():
+        if len(members) < 2:
+            continue
+        # the finished one, then the one changed last, then the shorter name (NF.json
+        # before the NF-2.json the tutor saves beside it)
+        best = max(members, key=lambda m: (m[1].finished, _latest(m[1]), -len(m[0].file)))[0]
+        for outcome, _ in members:
+            if outcome is not best:
+                beaten[outcome.file] = best.file
+    return beaten
+
+
+def _score(path: Path, experiment: int, outcomes, pool: _Pool, settings) -> ClassResult:
+    beaten = _duplicates(outcomes)
+    files, todo = [], []
+    for outcome, record in outcomes:
+        if record is not None and outcome.file in beaten:
+            info = _summary(record)
+            outcome = FileOutcome(
+                outcome.file,
+                "duplicate",
+                f"{beaten[outcome.file]} holds the same run ({record.label} of "
+                f"{record.trainee.name}); that file is counted",
+                **info,
+            )
+            record = None
+        files.append(outcome)
+        if record is not None:
+            todo.append((outcome.file, record, experiment, settings))
+    replayed = pool.map(_replay, todo)
+    by_label = {item[0]: item[1:] for item in replayed}
+    rows, demo_rows = [], []
+    for i, outcome in enumerate(files):
+        if not outcome.counted:
+            continue
+        kind, reason, row, extra = by_label[outcome.file]
+        if kind != "counted":
+            files[i] = replace(outcome, kind=kind, reason=reason)
+            continue
+        who = {"trainee": outcome.trainee, "trainee_key": outcome.trainee_key}
+        rows.append({"teacher": 0, **who, "file": outcome.file, **row})
+        demo_rows += [{"teacher": 0, **who, **d} for d in extra]
+    order = list(EXPERIMENTS[experiment]["conditions"])
+    runs, demos = pd.DataFrame(rows), pd.DataFrame(demo_rows)
+    for frame in (runs, demos):
+        if frame.empty:
+            frame["condition"] = pd.Categorical([], categories=order, ordered=True)
+        else:
+            frame["condition"] = pd.Categorical(frame["condition"], categories=order, ordered=True)
+    if not runs.empty:  # the trainees' numbers in the class, in key order
+        number = {key: i for i, key in enumerate(sorted(set(runs.trainee_key)))}
+        runs["teacher"] = runs.trainee_key.map(number)
+        demos["teacher"] = demos.trainee_key.map(number)
+        runs = runs.sort_values(["teacher", "run", "condition"], kind="stable")
+        runs = runs.reset_index(drop=True)
+    return ClassResult(experiment, str(path), runs, demos, files, settings)
