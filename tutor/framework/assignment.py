@@ -336,11 +336,14 @@ def _csv_entries(text: str, source: str) -> list[tuple[str, str, str | None]]:
         )
     header_line = lines[first]
     sep = next((s for s in _SEPARATORS if s in header_line), ",")
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=sep, strict=True)
+    rows = []
     try:
-        rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=sep))
+        rows.extend(reader)
     except csv.Error as exc:
         raise InvalidPlanError(
-            f"{source} is not readable as CSV ({exc}): check its quotes"
+            f"{source}, line {reader.line_num} is not readable as CSV ({exc}): a name in "
+            'double quotes must end with a closing quote, e.g. "Smith, Jo"'
         ) from exc
     header = [cell.strip().lower() for cell in rows[first]]
     if "trainee" not in header or len(set(header)) != len(header):
