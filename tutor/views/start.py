@@ -435,7 +435,8 @@ class PickPlaceExperiment(StartForm):
             try:
                 self.class_plan = plan_from_env(tuple(PICKPLACE_CONDITIONS))
             except InvalidPlanError as exc:
-                self._condition_problem = f"{exc} Ask your educator."
+                text = str(exc)
+                self._condition_problem = f"{text[:1].upper()}{text[1:]} Ask your educator."
         locked = self._fixed_condition is not None or self.class_plan is not None
         self.condition_buttons = w.ToggleButtons(
             options=list(PICKPLACE_CONDITIONS),
