@@ -46,15 +46,18 @@ def _name(spec: str) -> str:
     return re.sub(r"[-_.]+", "-", match.group(1)).lower()
 
 
-def _pyproject_deps() -> set[str]:
+def _pyproject_deps(*extras: str) -> set[str]:
+    """Names of the runtime dependencies and those of ``extras`` (default: notebooks, test)."""
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    extras = project["optional-dependencies"]
-    specs = [*project["dependencies"], *extras["notebooks"], *extras["test"]]
+    optional = project["optional-dependencies"]
+    specs = list(project["dependencies"])
+    for extra in extras or ("notebooks", "test"):
+        specs += optional[extra]
     return {_name(s) for s in specs}
 
 
-def _environment() -> tuple[dict, set[str], set[str], list[str]]:
-    env = yaml.safe_load((ROOT / "environment.yml").read_text())
+def _environment(path: Path = ROOT / "environment.yml") -> tuple[dict, set, set, list[str]]:
+    env = yaml.safe_load(path.read_text())
     conda, pip, self_install = set(), set(), []
     for entry in env["dependencies"]:
         if isinstance(entry, dict):
@@ -86,6 +89,52 @@ def test_environment_yml_matches_pyproject():
         f"environment.yml pip: section should hold exactly {sorted(PIP_ONLY)}, not {sorted(pip)}"
     )
     assert not conda & pip, f"listed both for conda and pip: {sorted(conda & pip)}"
+
+
+def test_binder_environment_is_runtime_and_notebooks_only():
+    """binder/ (repo2docker): runtime + notebooks dependencies exactly, no test tools."""
+    env, conda, pip, self_install = _environment(ROOT / "binder" / "environment.yml")
+    assert env["channels"] == ["conda-forge"]
+    assert "python=3.11" in env["dependencies"]
+    assert ENV_INFRASTRUCTURE <= conda, "binder/environment.yml must list python and pip"
+    assert not self_install, (
+        "binder/environment.yml must not install the package (binder/postBuild does, "
+        "non-editable, so the environment is not rebuilt on every commit)"
+    )
+    wanted = {CONDA_NAME.get(n, n) for n in _pyproject_deps("notebooks")}
+    listed = (conda - ENV_INFRASTRUCTURE) | pip
+    test_only = {CONDA_NAME.get(n, n) for n in _pyproject_deps("test")} - wanted
+    assert not listed & test_only, f"test tools in binder/environment.yml: {listed & test_only}"
+    missing, extra = sorted(wanted - listed), sorted(listed - wanted)
+    assert not missing, f"runtime/notebooks dependencies missing from binder/: {missing}"
+    assert not extra, f"in binder/environment.yml but not runtime/notebooks: {extra}"
+
+
+def _pip_installs(script: str) -> list[list[str]]:
+    """The arguments of every ``pip install`` command in a shell script."""
+    found = []
+    for line in script.splitlines():
+        words = line.split("#", 1)[0].split()
+        for k in range(len(words) - 1):
+            if words[k].endswith("pip") and words[k + 1] == "install":
+                found.append(words[k + 2 :])
+    return found
+
+
+def test_binder_postbuild_installs_the_package_non_editable():
+    path = ROOT / "binder" / "postBuild"
+    assert path.is_file(), "binder/postBuild is missing"
+    assert os.stat(path).st_mode & 0o111, "binder/postBuild must be executable (chmod +x)"
+    script = path.read_text()
+    assert script.startswith("#!"), "binder/postBuild needs a #! line (e.g. #!/usr/bin/env bash)"
+    installs = _pip_installs(script)
+    assert len(installs) == 1, f"binder/postBuild should run one pip install, found {installs}"
+    (args,) = installs
+    assert "--no-deps" in args, "postBuild's pip install needs --no-deps (conda installs them)"
+    assert "." in args, f"postBuild must pip install the package itself (.), got {args}"
+    assert not {"-e", "--editable"} & set(args), "postBuild must install non-editable"
+    overrides = re.findall(r"\bcp\s+(\S+)", script)
+    assert all((ROOT / src).is_file() for src in overrides), f"postBuild copies {overrides}"
 
 
 NOTEBOOKS = sorted(

@@ -23,7 +23,13 @@ from tutor.views.worked_example import example_png, instruction_text, instructio
 @pytest.fixture
 def person(tmp_path, monkeypatch):
     """A person at the notebook (not headless), runs saved under tmp_path."""
-    for var in ("TUTOR_HEADLESS", "TUTOR_TRAINEE", "TUTOR_CONDITION", "JUPYTERHUB_USER"):
+    for var in (
+        "TUTOR_HEADLESS",
+        "TUTOR_TRAINEE",
+        "TUTOR_CONDITION",
+        "TUTOR_CLASS_PLAN",
+        "JUPYTERHUB_USER",
+    ):
         monkeypatch.delenv(var, raising=False)
     monkeypatch.setenv("TUTOR_SESSION_DIR", str(tmp_path))
     return monkeypatch

@@ -17,6 +17,7 @@ __all__ = [
     "InvalidParameterError",
     "NotFittedError",
     "InvalidFileError",
+    "InvalidPlanError",
     "SaveError",
     "SessionInUseError",
     "WrongRunError",
@@ -53,6 +54,11 @@ class NotFittedError(TutorError, RuntimeError):
 
 class InvalidFileError(TutorError, ValueError):
     """A session or demonstration file is corrupt, truncated, of the wrong kind or hostile."""
+
+
+class InvalidPlanError(InvalidFileError):
+    """A class plan (``TUTOR_CLASS_PLAN``) cannot be used: unreadable, a wrong header or
+    format, an unknown condition, or one trainee listed with two conditions."""
 
 
 class SaveError(TutorError, OSError):

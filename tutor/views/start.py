@@ -25,8 +25,17 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
     The trainee's name (see :func:`tutor.runtime.default_trainee`); the name field is
     then locked. Without it, ``JUPYTERHUB_USER`` is the default on a hub.
 ``TUTOR_CONDITION``
-    Experiment 2's condition (NF, RF, BF or SF); the condition buttons are then locked
-    and say why. A value that is not a condition is refused with a message.
+    Experiment 2's condition (NF, RF, BF or SF) for everyone on this server; the
+    condition buttons are then locked and say why. A value that is not a condition is
+    refused with a message. It wins over the class plan.
+``TUTOR_CLASS_PLAN``
+    A class plan file (CSV or JSON, :mod:`tutor.framework.assignment`) saying which
+    trainee teaches in which condition, or "balanced". The condition buttons then show
+    the condition of the name in the form (it follows the name as it is typed), are
+    locked, and the note says why ("your educator's class plan assigns you RF"). If the
+    trainee's folder already holds counted runs in another condition (the roster changed
+    after they started), they carry on in that condition and the note says so. A plan
+    that cannot be used is said in the form, and Start waits for the educator to fix it.
 ``TUTOR_HEADLESS=1``
     Automated runs: the form starts itself with the default name and feeds the bundled
     demonstrations to every run (:meth:`StartForm.autoplay`).
@@ -44,8 +53,16 @@ from pathlib import Path
 
 import ipywidgets as w
 
-from ..errors import InvalidParameterError, TutorError
-from ..runtime import default_trainee, headless, normalise_name, session_dir
+from ..errors import InvalidParameterError, InvalidPlanError, TutorError
+from ..framework.assignment import plan_from_env
+from ..runtime import (
+    default_trainee,
+    headless,
+    normalise_name,
+    session_dir,
+    sessions_root,
+    trainee_key,
+)
 from ..tasks.maze_run import PHASE_ORDER
 from ..tasks.pickplace_protocol import CONDITIONS as PICKPLACE_CONDITIONS
 from ..tasks.pickplace_protocol import RUNS
@@ -156,11 +173,12 @@ class StartForm:
         self.results_box = w.Output()
         self.results_box.add_class("lfd-start-results")
         self.stage = w.VBox()
-        notes = []
-        if fixed_name:
-            notes.append("Your name was set by your educator (TUTOR_TRAINEE).")
-        self._extra_fields = self._condition_fields(notes)
-        self.note.value = "<br>".join(html.escape(n, quote=False) for n in notes)
+        self._name_note = (
+            "Your name was set by your educator (TUTOR_TRAINEE)." if fixed_name else ""
+        )
+        self._extra_fields = self._condition_fields()
+        self._show_notes()
+        self.name.observe(lambda _: self._name_changed(), names="value")
         form = w.VBox(
             [
                 w.HTML(f"<b>{html.escape(self.title)}</b>"),
@@ -182,9 +200,24 @@ class StartForm:
 
     # ---------------------------------------------------------------- the form
 
-    def _condition_fields(self, notes: list[str]) -> list:
-        """Extra widgets of the form (Experiment 2: the condition); may add to ``notes``."""
+    def _condition_fields(self) -> list:
+        """Extra widgets of the form (Experiment 2: the condition)."""
         return []
+
+    def _notes(self) -> list[str]:
+        """What the note under the form says before Start (one line each)."""
+        return [self._name_note] if self._name_note else []
+
+    def _show_notes(self) -> None:
+        self.note.value = "<br>".join(html.escape(n, quote=False) for n in self._notes())
+
+    def _name_changed(self) -> None:
+        """The trainee typed in the name field (before Start: Experiment 2's plan follows)."""
+
+    def typed_name(self) -> str:
+        """The name the form would start with: the one typed, else the default one."""
+        typed = self.name.value
+        return typed if typed.strip() else default_trainee()
 
     @property
     def condition(self) -> str | None:
@@ -209,9 +242,8 @@ class StartForm:
         if self.trainee is not None:
             return
         try:
-            typed = self.name.value
-            name = normalise_name(typed if typed.strip() else default_trainee())
-            self.check_ready()
+            name = normalise_name(self.typed_name())
+            self.check_ready(name)
             folder = session_dir(name)
         except TutorError as exc:
             self._say(str(exc), problem=True)
@@ -226,8 +258,9 @@ class StartForm:
         )
         self._advance()
 
-    def check_ready(self) -> None:
-        """Raise a TutorError when the form cannot start (Experiment 2: no condition)."""
+    def check_ready(self, name: str) -> None:
+        """Raise a TutorError when the form cannot start for ``name`` (Experiment 2: no
+        condition); may settle what the runs need (Experiment 2: the plan's condition)."""
 
     # ---------------------------------------------------------------- the runs
 
@@ -385,15 +418,26 @@ class PickPlaceExperiment(StartForm):
         self.scene3d = "auto" if scene3d is True else scene3d
         self._fixed_condition = None
         self._condition_problem = None
+        #: the class plan (``TUTOR_CLASS_PLAN``), when one is set and TUTOR_CONDITION is not
+        self.class_plan = None
+        #: the plan's assignment of the name in the form (None without a plan)
+        self.assignment = None
+        self.carried_on = None
         self._task = None
         super().__init__(start)
 
-    def _condition_fields(self, notes: list[str]) -> list:
+    def _condition_fields(self) -> list:
         try:
             self._fixed_condition = condition_from_env()
         except InvalidParameterError as exc:
-            self._condition_problem = str(exc)
-            notes.append(f"{exc} Ask your educator.")
+            self._condition_problem = f"{exc} Ask your educator."
+        if self._fixed_condition is None and self._condition_problem is None:
+            try:
+                self.class_plan = plan_from_env(tuple(PICKPLACE_CONDITIONS))
+            except InvalidPlanError as exc:
+                text = str(exc)
+                self._condition_problem = f"{text[:1].upper()}{text[1:]} Ask your educator."
+        locked = self._fixed_condition is not None or self.class_plan is not None
         self.condition_buttons = w.ToggleButtons(
             options=list(PICKPLACE_CONDITIONS),
             value=self._fixed_condition or DEFAULT_CONDITION,
@@ -405,25 +449,87 @@ class PickPlaceExperiment(StartForm):
                 "SF: you choose which plants the robot tries",
             ],
             style={"button_width": "56px"},
-            disabled=self._fixed_condition is not None,
+            disabled=locked,
         )
         self.condition_buttons.add_class("lfd-start-condition")
-        if self._fixed_condition is not None:
+        self._follow_plan()
+        return [self.condition_buttons]
+
+    def _follow_plan(self) -> None:
+        """Show the class plan's condition for the name in the form (before Start)."""
+        if self.class_plan is None or self.trainee is not None:
+            return
+        try:
+            self.assignment = self.class_plan.assign(self.typed_name())
+        except TutorError:  # a name the form will refuse at Start, and say why
+            self.assignment = None
+            return
+        self.condition_buttons.value = self.assignment.condition
+
+    def _name_changed(self) -> None:
+        if self.class_plan is not None and self.trainee is None:
+            self._follow_plan()
+            self._show_notes()
+
+    def _notes(self) -> list[str]:
+        notes = super()._notes()
+        if self._condition_problem is not None:
+            notes.append(self._condition_problem)
+        elif self._fixed_condition is not None:
             notes.append(
                 f"Your condition, {self._fixed_condition}, was set by your educator "
                 "(TUTOR_CONDITION)."
             )
-        elif self._condition_problem is None:
+        elif self.class_plan is not None:
+            if self.assignment is None:
+                notes.append(
+                    "Type your name: your educator's class plan then gives your condition."
+                )
+            else:
+                reason = self.assignment.reason
+                notes.append(f"{reason[0].upper()}{reason[1:]} (for {self.assignment.trainee}).")
+        else:
             notes.append("Choose the condition your educator gave you.")
-        return [self.condition_buttons]
+        return notes
 
     @property
     def condition(self) -> str:
         return self.condition_buttons.value
 
-    def check_ready(self) -> None:
+    def check_ready(self, name: str) -> None:
         if self._condition_problem is not None:
             raise InvalidParameterError(self._condition_problem)
+        if self.class_plan is None:
+            return
+        self.assignment = self.class_plan.assign(name)
+        condition = self.assignment.condition
+        if not self.practice.value:
+            started = self.started_conditions(name)
+            if started and condition not in started:
+                condition = started[0]
+                self.carried_on = (
+                    f"Your folder already holds runs in {condition}, so you carry on in "
+                    f"{condition}; your educator's class plan now assigns you "
+                    f"{self.assignment.condition} (was the plan changed?): tell your educator."
+                )
+        self.condition_buttons.value = condition
+
+    def started_conditions(self, name: str) -> list[str]:
+        """The conditions in which ``name``'s folder holds counted (not practice) runs."""
+        folder = sessions_root() / trainee_key(name)
+        return [
+            c
+            for c in PICKPLACE_CONDITIONS
+            if any((folder / run_file_name(2, c, k)).is_file() for k in range(1, RUNS + 1))
+        ]
+
+    def start(self) -> None:
+        if self.trainee is not None:
+            return
+        self.carried_on = None
+        super().start()
+        if self.trainee is not None and self.carried_on:
+            self.note.value += f"<br>{html.escape(self.carried_on, quote=False)}"
 
     def plan(self) -> list[dict]:
         c = self.condition
