@@ -191,3 +191,24 @@ def test_problem_kinds_are_named_in_plain_words():
         "unreadable", "not a run record", "cannot be replayed", "duplicate", "practice",
         "unfinished",
     }
+
+
+def test_the_class_plan_lists_who_is_missing_and_who_taught_another_condition(tmp_path):
+    write_simulated_class(tmp_path, 2, 8, seed=4)
+    names = [f"Trainee {i:02d}" for i in range(1, 9)]
+    # trainees 1-2 taught NF (teacher i is in condition i // 2); the plan says RF for one
+    taught = ["NF", "NF", "RF", "RF", "BF", "BF", "SF", "SF"]
+    lines = ["trainee,condition", "Trainee 01,RF",
+             *[f"{n},{c}" for n, c in zip(names[1:], taught[1:], strict=True)],
+             "Late Comer,", "Absent Student,BF"]
+    (tmp_path / "plan.csv").write_text("\n".join(lines) + "\n")
+    result = read_class(tmp_path, 2)
+    table = result.trainees.set_index("trainee")
+    assert table.loc["Late Comer", "missing"] == "no run file yet"
+    assert table.loc["Absent Student", "missing"] == "no run file yet"
+    assert "the class plan assigns RF" in table.loc["Trainee 01", "missing"]
+    assert table.loc["Trainee 02", "complete"]
+    assert len(result.complete_runs) == 7 * 3 and len(result.runs) == 8 * 3
+    assert "plan.csv" not in {f.file for f in result.files}
+    report = format_class_report(result, analyse_class(result))
+    assert "Absent Student" in report and "no run file yet" in report

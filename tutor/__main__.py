@@ -113,6 +113,12 @@ def _parser() -> argparse.ArgumentParser:
     )
     cls.add_argument("--out", default=None, help="folder for CSV, JSON, report and figure")
     cls.add_argument(
+        "--plan",
+        default=None,
+        help="the class plan (CSV/JSON; default plan.csv or plan.json in the class folder): "
+        "its trainees without runs are listed as missing",
+    )
+    cls.add_argument(
         "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
     )
     cls.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
@@ -127,7 +133,13 @@ def class_command(args) -> None:
 
     if args.out is not None:
         check_out_dir(args.out)
-    result = read_class(args.sessions, args.experiment, workers=args.workers)
+    def load_statistics():  # pingouin takes a second to import: do it while runs replay
+        import pingouin  # noqa: F401
+
+    result = read_class(
+        args.sessions, args.experiment, workers=args.workers, plan=args.plan,
+        meanwhile=load_statistics,
+    )
     analysis = analyse_class(result)
     print(format_class_report(result, analysis))
     if args.out is not None:

@@ -41,6 +41,7 @@ import pandas as pd
 
 from ..errors import InvalidFileError, InvalidParameterError, TutorError
 from ..fileio import MAX_FILE_BYTES, decode_text, megabytes, parse_json, read_json
+from ..framework.assignment import ClassPlan, load_plan
 from ..framework.record import RunRecord
 from .cohort import EXPERIMENTS, StudySettings, _limit_threads, _task, rows_of
 
@@ -147,6 +148,9 @@ class ClassResult:
     demos: pd.DataFrame
     files: list[FileOutcome] = field(default_factory=list)
     settings: StudySettings = field(default_factory=StudySettings)
+    #: the class plan's trainees (folder key -> (name, Experiment 2 condition or "")), when
+    #: a plan was given: those without a file are listed as missing
+    roster: dict = field(default_factory=dict)
 
     @property
     def not_counted(self) -> list[FileOutcome]:
@@ -165,11 +169,20 @@ class ClassResult:
         want_runs = EXPERIMENTS[self.experiment]["runs"]
         mine = [f for f in self.files if f.trainee_key and f.kind != "other experiment"]
         rows = []
-        for key in sorted({f.trainee_key for f in mine}):
+        for key in sorted({f.trainee_key for f in mine} | set(self.roster)):
             theirs = [f for f in mine if f.trainee_key == key]
             counted = [f for f in theirs if f.counted]
-            names = Counter(f.trainee for f in theirs)
-            if self.experiment == 1:
+            names = Counter(f.trainee for f in theirs) or Counter([self.roster[key][0]])
+            assigned = self.roster.get(key, ("", ""))[1] if self.experiment == 2 else ""
+            taught = {f.condition for f in counted}
+            if not theirs:
+                missing = "no run file yet"
+            elif assigned and taught and taught != {assigned}:
+                missing = (
+                    f"taught {', '.join(sorted(taught))}, but the class plan assigns "
+                    f"{assigned}"
+                )
+            elif self.experiment == 1:
                 done = {f.condition for f in counted}
                 lacking = [c for c in conditions if c not in done]
                 missing = ", ".join(lacking)
@@ -192,6 +205,7 @@ class ClassResult:
                     "not_counted": len(theirs) - len(counted),
                     "missing": missing,
                     "complete": not missing,
+                    "on_plan": key in self.roster,
                 }
             )
         return pd.DataFrame(
@@ -204,6 +218,7 @@ class ClassResult:
                 "not_counted",
                 "missing",
                 "complete",
+                "on_plan",
             ],
         )
 
@@ -360,7 +375,12 @@ def _latest(record: RunRecord) -> str:
 
 
 def read_class(
-    source, experiment: int, workers: int | None = None, settings: StudySettings | None = None
+    source,
+    experiment: int,
+    workers: int | None = None,
+    settings: StudySettings | None = None,
+    plan=None,
+    meanwhile=None,
 ) -> ClassResult:
     """Read and score every run record of a class (see the module docstring).
 
@@ -373,6 +393,14 @@ def read_class(
         Processes that replay the runs (default: the machine's cores); 1 works here.
     settings : StudySettings, optional
         The analysis settings (default: the simulated cohorts' own).
+    plan : path or ClassPlan, optional
+        The class plan (:mod:`tutor.framework.assignment`): its trainees without a file
+        are listed as missing, and in Experiment 2 a trainee who taught another
+        condition than the plan's is not counted as whole. Default: ``plan.csv`` or
+        ``plan.json`` in the class folder when there is one.
+    meanwhile : callable, optional
+        Called here while the workers replay the runs (the command line imports the
+        statistics then, which would otherwise wait for them).
 
     Returns
     -------
@@ -383,7 +411,8 @@ def read_class(
     InvalidParameterError
         ``experiment`` is not 1 or 2, or ``workers`` is not a whole number >= 1.
     InvalidFileError
-        ``source`` is neither a folder nor a readable zip file.
+        ``source`` is neither a folder nor a readable zip file (InvalidPlanError: the
+        plan cannot be read).
     """
     if isinstance(experiment, bool) or experiment not in EXPERIMENTS:
         raise InvalidParameterError(
@@ -414,9 +443,28 @@ def read_class(
             "the folder the kit keeps every trainee's runs in, e.g. /srv/lfd-class)"
         )
     workers = min(os.cpu_count() or 1, max(1, len(labels))) if workers is None else workers
+    roster = _roster(path, plan, experiment)
+    labels = [lab for lab in labels if PurePosixPath(lab).name not in PLAN_NAMES]
     with _Pool(workers) as pool:
         outcomes = pool.map(_read, [(str(path), is_zip, lab, experiment) for lab in labels])
-        return _score(path, experiment, outcomes, pool, settings)
+        result = _score(path, experiment, outcomes, pool, settings, meanwhile)
+    result.roster = roster
+    return result
+
+
+#: the class plan's file names in a class folder (read as the plan, not as runs)
+PLAN_NAMES = ("plan.csv", "plan.json")
+
+
+def _roster(path: Path, plan, experiment: int) -> dict:
+    if plan is None and path.is_dir():
+        plan = next((path / n for n in PLAN_NAMES if (path / n).is_file()), None)
+    if plan is None:
+        return {}
+    if not isinstance(plan, ClassPlan):
+        # the plan assigns Experiment 2's conditions; for Experiment 1 it is a roster
+        plan = load_plan(plan, EXPERIMENTS[2]["conditions"], 2)
+    return {key: (plan.names[key], plan.table[key][0]) for key in plan.table}
 
 
 class _Pool:
@@ -437,11 +485,18 @@ class _Pool:
             _limit_threads()
         return self
 
-    def map(self, fn, items) -> list:
+    def map(self, fn, items, meanwhile=None) -> list:
+        """``fn`` of each item; ``meanwhile()`` runs here while the workers work."""
         if self._pool is None or len(items) < 2:
-            return [fn(item) for item in items]
+            results = [fn(item) for item in items]
+            if meanwhile is not None:
+                meanwhile()
+            return results
         chunk = max(1, len(items) // (4 * self.workers))
-        return list(self._pool.map(fn, items, chunksize=chunk))
+        pending = self._pool.map(fn, items, chunksize=chunk)  # submitted at once
+        if meanwhile is not None:
+            meanwhile()
+        return list(pending)
 
     def __exit__(self, *exc):
         if self._pool is not None:
@@ -468,7 +523,7 @@ def _duplicates(outcomes) -> dict[str, str]:
     return beaten
 
 
-def _score(path: Path, experiment: int, outcomes, pool: _Pool, settings) -> ClassResult:
+def _score(path: Path, experiment: int, outcomes, pool: _Pool, settings, meanwhile):
     beaten = _duplicates(outcomes)
     files, todo = [], []
     for outcome, record in outcomes:
@@ -485,7 +540,7 @@ def _score(path: Path, experiment: int, outcomes, pool: _Pool, settings) -> Clas
         files.append(outcome)
         if record is not None:
             todo.append((outcome.file, record, experiment, settings))
-    replayed = pool.map(_replay, todo)
+    replayed = pool.map(_replay, todo, meanwhile)
     by_label = {item[0]: item[1:] for item in replayed}
     rows, demo_rows = [], []
     for i, outcome in enumerate(files):
