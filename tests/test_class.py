@@ -212,3 +212,28 @@ def test_the_class_plan_lists_who_is_missing_and_who_taught_another_condition(tm
     assert "plan.csv" not in {f.file for f in result.files}
     report = format_class_report(result, analyse_class(result))
     assert "Absent Student" in report and "no run file yet" in report
+
+
+def test_a_refresh_reads_only_the_files_that_changed(tmp_path, monkeypatch):
+    write_simulated_class(tmp_path, 1, 4, seed=5, workers=1)
+    cache: dict = {}
+    first = read_class(tmp_path, 1, workers=1, cache=cache)
+    from tutor.study import classroom
+
+    seen = []
+    real_read, real_replay = classroom._read, classroom._replay
+    monkeypatch.setattr(classroom, "_read", lambda item: seen.append(item[2]) or real_read(item))
+    monkeypatch.setattr(
+        classroom, "_replay", lambda item: seen.append(item[0]) or real_replay(item)
+    )
+    again = read_class(tmp_path, 1, workers=1, cache=cache)
+    assert seen == [] and again.runs.equals(first.runs)
+    changed = sorted(tmp_path.glob("*/VF.json"))[0]
+    data = json.loads(changed.read_text())
+    data["attempts"][-1]["finished"] = False
+    changed.write_text(json.dumps(data))
+    label = changed.relative_to(tmp_path).as_posix()
+    third = read_class(tmp_path, 1, workers=1, cache=cache)
+    assert seen == [label, label]  # read and replayed once, alone
+    assert [f.kind for f in third.files if f.file == label] == ["unfinished"]
+    assert len(third.runs) == len(first.runs) - 1

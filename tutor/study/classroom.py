@@ -381,6 +381,7 @@ def read_class(
     settings: StudySettings | None = None,
     plan=None,
     meanwhile=None,
+    cache: dict | None = None,
 ) -> ClassResult:
     """Read and score every run record of a class (see the module docstring).
 
@@ -401,6 +402,10 @@ def read_class(
     meanwhile : callable, optional
         Called here while the workers replay the runs (the command line imports the
         statistics then, which would otherwise wait for them).
+    cache : dict, optional
+        Kept by the caller between reads of the same class folder (the dashboard's
+        Refresh): a file whose size and modification time are unchanged is neither read
+        nor replayed again. Ignored for a zip.
 
     Returns
     -------
@@ -445,11 +450,47 @@ def read_class(
     workers = min(os.cpu_count() or 1, max(1, len(labels))) if workers is None else workers
     roster = _roster(path, plan, experiment)
     labels = [lab for lab in labels if PurePosixPath(lab).name not in PLAN_NAMES]
+    memo = _Memo(None if is_zip else cache, path, labels, (experiment, settings))
     with _Pool(workers) as pool:
-        outcomes = pool.map(_read, [(str(path), is_zip, lab, experiment) for lab in labels])
-        result = _score(path, experiment, outcomes, pool, settings, meanwhile)
+        fresh = memo.todo(labels, "read")
+        read = pool.map(_read, [(str(path), is_zip, lab, experiment) for lab in fresh])
+        outcomes = memo.merge(labels, "read", dict(zip(fresh, read, strict=True)))
+        result = _score(path, experiment, outcomes, pool, settings, meanwhile, memo)
     result.roster = roster
     return result
+
+
+class _Memo:
+    """What :func:`read_class` learnt about each file, kept while the file is unchanged."""
+
+    def __init__(self, cache, root: Path, labels, context):
+        self.cache, self.stamps = cache, {}
+        if cache is None:
+            return
+        if cache.get("context") != context:  # another experiment or settings: start over
+            cache.clear()
+            cache["context"] = context
+        for label in labels:
+            try:
+                info = (root / label).stat()
+                self.stamps[label] = (info.st_mtime_ns, info.st_size, info.st_ino)
+            except OSError:
+                self.stamps[label] = None
+
+    def _known(self, label: str, step: str):
+        if self.cache is None or self.stamps.get(label) is None:
+            return None
+        hit = self.cache.get((step, label))
+        return hit[1] if hit is not None and hit[0] == self.stamps[label] else None
+
+    def todo(self, labels, step: str) -> list:
+        return [lab for lab in labels if self._known(lab, step) is None]
+
+    def merge(self, labels, step: str, new: dict) -> list:
+        if self.cache is not None:
+            for label, value in new.items():
+                self.cache[(step, label)] = (self.stamps.get(label), value)
+        return [new[lab] if lab in new else self._known(lab, step) for lab in labels]
 
 
 #: the class plan's file names in a class folder (read as the plan, not as runs)
@@ -523,7 +564,7 @@ def _duplicates(outcomes) -> dict[str, str]:
     return beaten
 
 
-def _score(path: Path, experiment: int, outcomes, pool: _Pool, settings, meanwhile):
+def _score(path: Path, experiment: int, outcomes, pool: _Pool, settings, meanwhile, memo):
     beaten = _duplicates(outcomes)
     files, todo = [], []
     for outcome, record in outcomes:
@@ -540,8 +581,12 @@ def _score(path: Path, experiment: int, outcomes, pool: _Pool, settings, meanwhi
         files.append(outcome)
         if record is not None:
             todo.append((outcome.file, record, experiment, settings))
-    replayed = pool.map(_replay, todo, meanwhile)
-    by_label = {item[0]: item[1:] for item in replayed}
+    fresh = set(memo.todo([item[0] for item in todo], "replay"))
+    replayed = pool.map(_replay, [item for item in todo if item[0] in fresh], meanwhile)
+    merged = memo.merge(
+        [item[0] for item in todo], "replay", {item[0]: item for item in replayed}
+    )
+    by_label = {item[0]: item[1:] for item in merged}
     rows, demo_rows = [], []
     for i, outcome in enumerate(files):
         if not outcome.counted:
