@@ -266,7 +266,7 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
         lines.append("")
         lines.append(f"Trainees with runs still to finish ({len(lacking)}):")
         for _, t in lacking.iterrows():
-            lines.append(f"  {t.trainee} ({t.trainee_key}): missing {t.missing}")
+            lines.append(f"  {t.trainee} ({t.trainee_key}): {t.missing}")
     problems = result.not_counted
     lines.append("")
     if problems:

@@ -185,7 +185,7 @@ class ClassResult:
             elif self.experiment == 1:
                 done = {f.condition for f in counted}
                 lacking = [c for c in conditions if c not in done]
-                missing = ", ".join(lacking)
+                missing = ("still to do: " + ", ".join(lacking)) if lacking else ""
             else:
                 runs_by_condition = Counter(f.condition for f in counted)
                 if len(runs_by_condition) > 1:
@@ -195,7 +195,7 @@ class ClassResult:
                 else:
                     have = {f.run for f in counted}
                     lacking = [str(r) for r in range(1, want_runs + 1) if r not in have]
-                    missing = ("run " + ", ".join(lacking)) if lacking else ""
+                    missing = ("still to do: run " + ", ".join(lacking)) if lacking else ""
             rows.append(
                 {
                     "trainee_key": key,
@@ -450,7 +450,8 @@ def read_class(
     workers = min(os.cpu_count() or 1, max(1, len(labels))) if workers is None else workers
     roster = _roster(path, plan, experiment)
     labels = [lab for lab in labels if PurePosixPath(lab).name not in PLAN_NAMES]
-    memo = _Memo(None if is_zip else cache, path, labels, (experiment, settings))
+    context = (str(path.resolve()), experiment, settings)  # a cache is for one class
+    memo = _Memo(None if is_zip else cache, path, labels, context)
     with _Pool(workers) as pool:
         fresh = memo.todo(labels, "read")
         read = pool.map(_read, [(str(path), is_zip, lab, experiment) for lab in fresh])

@@ -1,0 +1,362 @@
+"""The educator's class dashboard (notebook 05, also a Voila app).
+
+It points at the class folder, reads every trainee's runs (:func:`.classroom.read_class`)
+and shows, beside the paper's numbers and a simulated class of the same size
+(:func:`.class_report.analyse_class`):
+
+- how many trainees and runs are counted, and when it was last refreshed;
+- the class's η per condition beside the paper's and the simulation's, and the figure;
+- the paper's tests on the class (or why the class is too small for them);
+- the trainees still to finish (or on the class plan without any run yet);
+- every file not counted, with the reason.
+
+**Refresh** reads the folder again (only files that changed are read and replayed), and
+*Refresh every N s* does it by itself while the notebook runs. **Save the results**
+writes what ``lfd-tutor class --out`` writes, to a folder beside the class folder.
+
+The class folder is, in order: the ``folder`` argument, ``TUTOR_CLASS_DIR`` in the
+environment (the hub kit sets it for the educator), or the tutor's own sessions folder
+(:func:`tutor.runtime.sessions_root`, where trainees' runs go on one machine). With
+``TUTOR_HEADLESS=1`` and no folder given, the dashboard shows a simulated class
+(:func:`.simulated_class.write_simulated_class`), as a rehearsal would.
+
+Stable CSS classes for browser tests: ``lfd-class-dashboard``, ``lfd-class-folder``,
+``lfd-class-experiment``, ``lfd-class-refresh``, ``lfd-class-auto``,
+``lfd-class-status``, ``lfd-class-beside``, ``lfd-class-figure``, ``lfd-class-tests``,
+``lfd-class-trainees``, ``lfd-class-problems``, ``lfd-class-save``, ``lfd-class-rehearse``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import html
+import io
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import ipywidgets as w
+
+from ..errors import TutorError
+from ..runtime import headless, sessions_root
+from .class_report import analyse_class, class_figure, save_class
+from .classroom import read_class
+
+__all__ = ["ClassDashboard", "class_dashboard", "CLASS_DIR_ENV", "default_class_folder"]
+
+#: the environment variable naming the class folder (set for the educator by deploy/)
+CLASS_DIR_ENV = "TUTOR_CLASS_DIR"
+#: the shortest and longest automatic refresh interval, seconds
+REFRESH_RANGE = (10, 600)
+
+
+def default_class_folder() -> Path:
+    """``TUTOR_CLASS_DIR``, or else the tutor's sessions folder."""
+    value = os.environ.get(CLASS_DIR_ENV, "").strip()
+    return Path(value) if value else sessions_root()
+
+
+def _table(frame, float_format="{:.3f}") -> str:
+    """A small accessible HTML table (header cells, a caption-free plain style)."""
+    return frame.to_html(
+        classes="lfd-class-table",
+        border=0,
+        na_rep="–",
+        float_format=lambda v: float_format.format(v),
+        escape=True,
+    )
+
+
+def _list(items: list[str], empty: str) -> str:
+    if not items:
+        return f"<p>{html.escape(empty)}</p>"
+    return "<ul>" + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
+
+
+class ClassDashboard:
+    """The dashboard's widgets and what they do (see the module docstring).
+
+    Parameters
+    ----------
+    folder : path, optional
+        The class folder (default :func:`default_class_folder`).
+    experiment : {1, 2}
+    refresh_seconds : int, optional
+        Start refreshing by itself every so many seconds (10-600).
+    """
+
+    def __init__(self, folder=None, experiment: int = 1, refresh_seconds: int | None = None):
+        self._cache: dict = {}
+        self._timer = None
+        self._rehearsing = False
+        self.result = None
+        self.analysis = None
+        self.folder = w.Text(
+            value=str(default_class_folder() if folder is None else folder),
+            description="Class folder",
+            continuous_update=False,  # read when the educator presses Enter or leaves it
+            layout=w.Layout(width="100%"),
+            style={"description_width": "initial"},
+        )
+        self.folder.add_class("lfd-class-folder")
+        self.experiment = w.ToggleButtons(
+            options=[("Experiment 1 (maze)", 1), ("Experiment 2 (pick-and-place)", 2)],
+            value=experiment,
+            tooltips=["NF, VF, VR for every trainee", "NF, RF, BF or SF, three runs each"],
+        )
+        self.experiment.add_class("lfd-class-experiment")
+        self.refresh_button = w.Button(description="Refresh", icon="refresh")
+        self.refresh_button.add_class("lfd-class-refresh")
+        self.auto = w.Checkbox(value=False, description="Refresh every", indent=False)
+        self.auto.add_class("lfd-class-auto")
+        self.seconds = w.BoundedIntText(
+            value=30, min=REFRESH_RANGE[0], max=REFRESH_RANGE[1], description="seconds",
+            layout=w.Layout(width="150px"),
+        )
+        self.save_button = w.Button(description="Save the results", icon="save")
+        self.save_button.add_class("lfd-class-save")
+        self.rehearse_button = w.Button(
+            description="Try a simulated class",
+            tooltip="write a class of 30 simulated trainees to a temporary folder and show it",
+        )
+        self.rehearse_button.add_class("lfd-class-rehearse")
+        self.status = w.HTML()
+        self.status.add_class("lfd-class-status")
+        self.beside = w.HTML()
+        self.beside.add_class("lfd-class-beside")
+        self.figure = w.Image(format="png", layout=w.Layout(width="100%", max_width="1100px"))
+        self.figure.add_class("lfd-class-figure")
+        self.figure_caption = w.HTML()
+        self.tests = w.HTML()
+        self.tests.add_class("lfd-class-tests")
+        self.trainees = w.HTML()
+        self.trainees.add_class("lfd-class-trainees")
+        self.problems = w.HTML()
+        self.problems.add_class("lfd-class-problems")
+        self.refresh_button.on_click(lambda _: self.refresh())
+        self.experiment.observe(lambda _: self.refresh(), "value")
+        self.folder.observe(lambda _: self._folder_changed(), "value")
+        self.auto.observe(lambda change: self._auto(change["new"]), "value")
+        self.save_button.on_click(lambda _: self.save())
+        self.rehearse_button.on_click(lambda _: self.rehearse())
+        self.widget = w.VBox(
+            [
+                self.folder,
+                self.experiment,
+                w.HBox([self.refresh_button, self.auto, self.seconds, self.save_button,
+                        self.rehearse_button]),
+                self.status,
+                w.HTML("<h3>The class beside the paper</h3>"),
+                self.beside,
+                self.figure,
+                self.figure_caption,
+                w.HTML("<h3>The paper's tests</h3>"),
+                self.tests,
+                w.HTML("<h3>Trainees still to finish</h3>"),
+                self.trainees,
+                w.HTML("<h3>Files not counted</h3>"),
+                self.problems,
+            ]
+        )
+        self.widget.add_class("lfd-class-dashboard")
+        self.refresh()
+        if refresh_seconds is not None:
+            self.seconds.value = int(refresh_seconds)
+            self.auto.value = True
+
+    # ------------------------------------------------------------ reading
+
+    def _say(self, text: str, problem: bool = False) -> None:
+        colour = "#8b0000" if problem else "inherit"
+        self.status.value = (
+            f'<p role="status" aria-live="polite" style="color:{colour}">{text}</p>'
+        )
+
+    def refresh(self) -> None:
+        """Read the class folder again and redraw everything (errors are said in words)."""
+        folder = Path(self.folder.value.strip() or ".")
+        started = time.perf_counter()
+        try:
+            self.result = read_class(folder, self.experiment.value, cache=self._cache)
+            self.analysis = analyse_class(self.result)
+        except TutorError as exc:
+            self.result = self.analysis = None
+            self._clear()
+            self._say(html.escape(str(exc)), problem=True)
+            return
+        except Exception as exc:  # noqa: BLE001 - a widget callback must not raise
+            self.result = self.analysis = None
+            self._clear()
+            self._say(
+                "The class could not be read because of an error in the tutor "
+                f"({html.escape(type(exc).__name__)}: {html.escape(str(exc))}). Please "
+                "report it; the trainees' files are untouched.",
+                problem=True,
+            )
+            return
+        self._draw(time.perf_counter() - started)
+
+    def _folder_changed(self) -> None:
+        if not self._rehearsing:
+            self.refresh()
+
+    def _clear(self) -> None:
+        for part in (self.beside, self.tests, self.trainees, self.problems, self.figure_caption):
+            part.value = ""
+        self.figure.value = b""
+        self.figure.layout.display = "none"
+
+    def _draw(self, seconds: float) -> None:
+        result, analysis = self.result, self.analysis
+        trainees = result.trainees
+        n_counted = int((trainees.counted_runs > 0).sum()) if len(trainees) else 0
+        stamp = time.strftime("%H:%M:%S")
+        if not result.files and not len(trainees):
+            self._clear()
+            self._say(
+                f"No run files in {html.escape(result.source)} yet. Trainees' runs appear "
+                "here as they save them; press Refresh (or tick Refresh every) to look "
+                "again, or try a simulated class."
+            )
+            return
+        others = len(result.other_experiment)
+        aside = (
+            f" {others} files of Experiment {3 - result.experiment} are set aside (choose "
+            "that experiment above to see them)."
+            if others
+            else ""
+        )
+        self._say(
+            f"<b>{len(result.runs)} runs</b> counted from <b>{n_counted} trainees</b> "
+            f"in {html.escape(result.source)}; {len(result.not_counted)} files not "
+            f"counted.{aside} Read at {stamp} in {seconds:.1f} s."
+        )
+        if result.runs.empty:
+            self.beside.value = "<p>No finished run of this experiment yet.</p>"
+            self.figure.layout.display = "none"
+            self.figure_caption.value = ""
+        else:
+            self.beside.value = _table(analysis["beside"])
+            fig = class_figure(result, analysis)
+            buffer = io.BytesIO()
+            fig.savefig(buffer, format="png", dpi=90)
+            import matplotlib.pyplot as plt
+
+            plt.close(fig)
+            self.figure.value = buffer.getvalue()
+            self.figure.layout.display = ""
+            self.figure_caption.value = (
+                "<p><i>The class's η per condition (boxes: every counted run; red diamonds: "
+                "the paper; grey triangles: a simulated class of the same size).</i></p>"
+            )
+        self.tests.value = self._tests_html()
+        lacking = trainees[~trainees.complete] if len(trainees) else trainees
+        self.trainees.value = _list(
+            [
+                f"<b>{html.escape(t.trainee)}</b> ({html.escape(t.trainee_key)}): "
+                f"{html.escape(t.missing)}"
+                for _, t in lacking.iterrows()
+            ],
+            "Every trainee has finished every run.",
+        )
+        self.problems.value = _list(
+            [
+                f"<b>{html.escape(f.file)}</b>: {html.escape(f.kind)} — {html.escape(f.reason)}"
+                for f in result.not_counted
+            ],
+            "Every run file of this experiment was counted.",
+        )
+
+    def _tests_html(self) -> str:
+        from .class_report import _test_lines
+
+        parts = []
+        for who, label in (("class", "This class"), ("simulated", "Simulated, same size")):
+            lines = _test_lines(self.analysis[who], self.result.experiment, label)
+            parts.append("<pre style='white-space:pre-wrap'>" + html.escape("\n".join(lines))
+                         + "</pre>")
+        return "".join(parts)
+
+    # ------------------------------------------------------------ refreshing by itself
+
+    def _auto(self, on: bool) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        if on:
+            try:
+                loop = asyncio.get_running_loop()
+            except RuntimeError:
+                try:
+                    loop = asyncio.get_event_loop_policy().get_event_loop()
+                except RuntimeError:
+                    loop = None
+            if loop is None or not loop.is_running():
+                self.auto.value = False
+                self._say(
+                    "Refreshing by itself needs a running notebook (JupyterLab or Voila): "
+                    "press Refresh instead.",
+                    problem=True,
+                )
+                return
+            self._timer = loop.call_later(self.seconds.value, self._tick)
+
+    def _tick(self) -> None:
+        self._timer = None
+        if not self.auto.value:
+            return
+        self.refresh()
+        self._auto(True)
+
+    # ------------------------------------------------------------ files
+
+    def results_folder(self) -> Path:
+        """Where Save writes: ``<class folder>_results`` beside the class folder."""
+        folder = Path(self.folder.value.strip() or ".").resolve()
+        return folder.parent / f"{folder.name}_results"
+
+    def save(self) -> None:
+        """Write the class's CSV, JSON, report and figure (as ``lfd-tutor class --out``)."""
+        if self.result is None:
+            self._say("There is nothing to save: the class could not be read.", problem=True)
+            return
+        out = self.results_folder()
+        try:
+            paths = save_class(self.result, self.analysis, out)
+        except TutorError as exc:
+            self._say(html.escape(str(exc)), problem=True)
+            return
+        self._say(f"Saved {len(paths)} files in {html.escape(str(out))}.")
+
+    def rehearse(self, n: int = 30) -> Path:
+        """Show a class of ``n`` simulated trainees (2 runs unfinished, 3 files spoiled)."""
+        from .simulated_class import write_simulated_class
+
+        folder = Path(tempfile.mkdtemp(prefix="lfd-simulated-class-")) / "class"
+        self._say("Writing a simulated class (30 trainees)…")
+        write_simulated_class(folder, self.experiment.value, n if self.experiment.value == 1
+                              else 36, seed=1, unfinished=2, damaged=3)
+        self._rehearsing = True  # one read, not one for the new folder and one here
+        try:
+            self.folder.value = str(folder)
+        finally:
+            self._rehearsing = False
+        self.refresh()
+        return folder
+
+
+def class_dashboard(folder=None, experiment: int = 1, refresh_seconds: int | None = None):
+    """Build and show the dashboard (notebook 05); returns the :class:`ClassDashboard`.
+
+    With ``TUTOR_HEADLESS=1`` and no ``folder`` (and no ``TUTOR_CLASS_DIR``), it shows a
+    simulated class instead of an empty sessions folder.
+    """
+    from IPython.display import display
+
+    rehearse = folder is None and headless() and not os.environ.get(CLASS_DIR_ENV, "").strip()
+    board = ClassDashboard(folder, experiment, refresh_seconds)
+    if rehearse:
+        board.rehearse()
+    display(board.widget)
+    return board
