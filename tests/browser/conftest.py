@@ -6,6 +6,7 @@ autosave never writes outputs into the repository) and its own session folder.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -130,18 +131,17 @@ def jupyterlab(workdir):
         log.close()
 
 
-@pytest.fixture(scope="module")
-def voila(workdir):
-    root, env = workdir
-    env = {**env, "TUTOR_SESSION_DIR": str(root / "voila-sessions")}
+@contextlib.contextmanager
+def voila_server(root: Path, env: dict, notebook: str):
+    """Voila serving ``root/notebooks/<notebook>`` on a free loopback port; yields its URL."""
     port = free_port()
-    log = open(root / "voila.log", "w")  # noqa: SIM115
+    log = open(root / f"voila-{Path(notebook).stem}.log", "w")  # noqa: SIM115
     proc = subprocess.Popen(
         [
             sys.executable,
             "-m",
             "voila",
-            str(root / "notebooks" / "02_maze_experiment.ipynb"),
+            str(root / "notebooks" / notebook),
             "--no-browser",
             f"--port={port}",
             "--Voila.ip=127.0.0.1",
@@ -159,6 +159,33 @@ def voila(workdir):
     finally:
         stop(proc)
         log.close()
+
+
+@pytest.fixture(scope="module")
+def voila(workdir):
+    root, env = workdir
+    env = {**env, "TUTOR_SESSION_DIR": str(root / "voila-sessions")}
+    with voila_server(root, env, "02_maze_experiment.ipynb") as url:
+        yield url
+
+
+def axe_check(page, artifacts: Path, name: str, include: list[str]) -> None:
+    """Run axe-core on the parts ``include`` (CSS selectors) of ``page``; fail on serious
+    or critical violations. The full results go to test-artifacts/axe_<name>.json."""
+    from axe_playwright_python.sync_playwright import Axe
+
+    context = {"include": [[s] for s in include]}
+    options = {"resultTypes": ["violations", "incomplete"]}
+    results = Axe().run(page, context=context, options=options).response
+    (artifacts / f"axe_{name}.json").write_text(json.dumps(results, indent=2))
+    assert results["passes"], "axe checked nothing"
+    serious = [
+        f"{v['id']} ({v['impact']}): {v['help']} at "
+        + "; ".join(" ".join(node["target"]) for node in v["nodes"][:5])
+        for v in results["violations"]
+        if v["impact"] in ("serious", "critical")
+    ]
+    assert not serious, "\n".join(serious)
 
 
 @pytest.fixture(scope="module")

@@ -40,7 +40,12 @@ import nbformat
 import numpy as np
 import pytest
 
-from tests.browser.conftest import fail_on_errors, start_notebook_kernel, watch_errors
+from tests.browser.conftest import (
+    axe_check,
+    fail_on_errors,
+    start_notebook_kernel,
+    watch_errors,
+)
 from tests.browser.test_maze_browser import (
     LAYOUT,
     MAP,
@@ -484,31 +489,14 @@ def test_reset_asks_then_keeps_the_old_attempt(maze_page, artifacts):
 # ---------------------------------------------------------------- axe-core
 
 
-def _axe(page, artifacts, name: str, include: list[str]) -> None:
-    from axe_playwright_python.sync_playwright import Axe
-
-    context = {"include": [[s] for s in include]}
-    options = {"resultTypes": ["violations", "incomplete"]}
-    results = Axe().run(page, context=context, options=options).response
-    (artifacts / f"axe_{name}.json").write_text(json.dumps(results, indent=2))
-    assert results["passes"], "axe checked nothing"
-    serious = [
-        f"{v['id']} ({v['impact']}): {v['help']} at "
-        + "; ".join(" ".join(node["target"]) for node in v["nodes"][:5])
-        for v in results["violations"]
-        if v["impact"] in ("serious", "critical")
-    ]
-    assert not serious, "\n".join(serious)
-
-
 def test_axe_maze_tutor(maze_page, artifacts):
     maze_page.locator(".lfd-maze-tutor").first.wait_for(timeout=WIDGET_TIMEOUT_MS)
     maze_page.screenshot(path=str(artifacts / "trainee_axe_maze.png"))
-    _axe(maze_page, artifacts, "maze", [".lfd-start-form", ".lfd-maze-tutor"])
+    axe_check(maze_page, artifacts, "maze", [".lfd-start-form", ".lfd-maze-tutor"])
 
 
 def test_axe_pickplace_tutor(pickplace_page, artifacts):
     page = pickplace_page
     _ensure_started(page, _form(page, "clicks"), artifacts)
     page.screenshot(path=str(artifacts / "trainee_axe_pickplace.png"))
-    _axe(page, artifacts, "pickplace", [".lfd-start-form", TUTOR])
+    axe_check(page, artifacts, "pickplace", [".lfd-start-form", TUTOR])

@@ -29,6 +29,7 @@ Stable CSS classes for browser tests: ``lfd-class-dashboard``, ``lfd-class-folde
 from __future__ import annotations
 
 import asyncio
+import base64
 import html
 import io
 import os
@@ -104,15 +105,19 @@ class ClassDashboard:
             options=[("Experiment 1 (maze)", 1), ("Experiment 2 (pick-and-place)", 2)],
             value=experiment,
             tooltips=["NF, VF, VR for every trainee", "NF, RF, BF or SF, three runs each"],
+            style={"button_width": "230px"},
         )
         self.experiment.add_class("lfd-class-experiment")
         self.refresh_button = w.Button(description="Refresh", icon="refresh")
         self.refresh_button.add_class("lfd-class-refresh")
-        self.auto = w.Checkbox(value=False, description="Refresh every", indent=False)
+        self.auto = w.Checkbox(
+            value=False, description="Refresh every", indent=False, layout=w.Layout(width="auto")
+        )
         self.auto.add_class("lfd-class-auto")
         self.seconds = w.BoundedIntText(
             value=30, min=REFRESH_RANGE[0], max=REFRESH_RANGE[1], description="seconds",
-            layout=w.Layout(width="150px"),
+            layout=w.Layout(width="140px"), style={"description_width": "initial"},
+            tooltip="seconds between automatic refreshes (10-600)",
         )
         self.save_button = w.Button(description="Save the results", icon="save")
         self.save_button.add_class("lfd-class-save")
@@ -125,7 +130,7 @@ class ClassDashboard:
         self.status.add_class("lfd-class-status")
         self.beside = w.HTML()
         self.beside.add_class("lfd-class-beside")
-        self.figure = w.Image(format="png", layout=w.Layout(width="100%", max_width="1100px"))
+        self.figure = w.HTML(layout=w.Layout(width="100%", max_width="1100px"))
         self.figure.add_class("lfd-class-figure")
         self.figure_caption = w.HTML()
         self.tests = w.HTML()
@@ -144,8 +149,16 @@ class ClassDashboard:
             [
                 self.folder,
                 self.experiment,
-                w.HBox([self.refresh_button, self.auto, self.seconds, self.save_button,
-                        self.rehearse_button]),
+                w.HBox(
+                    [
+                        self.refresh_button,
+                        self.auto,
+                        self.seconds,
+                        self.save_button,
+                        self.rehearse_button,
+                    ],
+                    layout=w.Layout(align_items="center", gap="8px"),
+                ),
                 self.status,
                 w.HTML("<h3>The class beside the paper</h3>"),
                 self.beside,
@@ -204,7 +217,7 @@ class ClassDashboard:
     def _clear(self) -> None:
         for part in (self.beside, self.tests, self.trainees, self.problems, self.figure_caption):
             part.value = ""
-        self.figure.value = b""
+        self.figure.value = ""
         self.figure.layout.display = "none"
 
     def _draw(self, seconds: float) -> None:
@@ -244,7 +257,12 @@ class ClassDashboard:
             import matplotlib.pyplot as plt
 
             plt.close(fig)
-            self.figure.value = buffer.getvalue()
+            png = base64.b64encode(buffer.getvalue()).decode("ascii")
+            self.figure.value = (
+                f'<img src="data:image/png;base64,{png}" style="width:100%" alt="'
+                + html.escape(self._figure_text(), quote=True)
+                + '">'
+            )
             self.figure.layout.display = ""
             self.figure_caption.value = (
                 "<p><i>The class's η per condition (boxes: every counted run; red diamonds: "
@@ -267,6 +285,17 @@ class ClassDashboard:
             ],
             "Every run file of this experiment was counted.",
         )
+
+    def _figure_text(self) -> str:
+        """The figure in words (its alternative text): η per condition, class and paper."""
+        beside = self.analysis["beside"]
+        measure = self.analysis["measure"]
+        parts = [
+            f"{c}: class {row.iloc[1]:.3f}, paper {row.iloc[2]:.3f}"
+            for c, row in beside.iterrows()
+            if row.iloc[0]
+        ]
+        return f"Box plots of the class's η per condition; {measure}: " + "; ".join(parts)
 
     def _tests_html(self) -> str:
         from .class_report import _test_lines
