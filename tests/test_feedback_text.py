@@ -38,12 +38,13 @@ def maze():
 
 
 def test_policies_are_a_registry_and_only_full_feedback_shows_totals():
-    assert set(FEEDBACK_POLICIES) == {"none", "all", "replay", "batch", "selected"}
+    assert set(FEEDBACK_POLICIES) == {"none", "all", "replay", "batch", "selected", "adaptive"}
     assert [p for p, v in FEEDBACK_POLICIES.items() if v.totals] == ["all"]
     assert FEEDBACK_POLICIES["replay"].shown(100, 7, [0, 9], []).tolist() == [7]
     assert FEEDBACK_POLICIES["batch"].shown(100, 7, [0, 9], []).tolist() == [0, 9]
     assert FEEDBACK_POLICIES["selected"].shown(100, 7, [0, 9], [3, 4]).tolist() == [3, 4]
     assert FEEDBACK_POLICIES["none"].shown(100, 7, [0, 9], [3]).size == 0
+    assert FEEDBACK_POLICIES["adaptive"].shown(100, 7, [0, 9], [5, 3]).tolist() == [5, 3]
     done = reveal("none", 100, [], finished=True)
     assert done.totals and done.everything and done.shown.size == 100
     assert reveal("batch", 100, [0, 9], practice=True).totals

@@ -4,6 +4,7 @@
 - :mod:`.metrics`: efficacy eps, efficiency eta, the session score.
 - :mod:`.failures`: incorrect, ambiguous and undemonstrated failures.
 - :mod:`.feedback`: the feedback policies (what r is, what totals may be shown).
+- :mod:`.selectors`: adaptive test sets, the k conditions shown after a demo (AF).
 - :mod:`.session`: :class:`TeachingSession`, demos in, feedback records out.
 - :mod:`.record`: :class:`RunRecord`, the typed, versioned record of one run (its
   attempts, demos and events), the one file format of a teaching run.
@@ -15,6 +16,7 @@ from .feedback import FEEDBACK_POLICIES, Visibility, reveal
 from .metrics import SessionScore, efficacy, efficiency, session_score
 from .record import Attempt, Demo, Event, RunRecord, Test, Trainee
 from .run import RunOverError, TeachingRun
+from .selectors import SELECTORS, SelectionContext, Selector, select
 from .session import FEEDBACK_MODES, FeedbackRecord, TeachingSession
 from .task import Task, Verdict
 
@@ -32,6 +34,10 @@ __all__ = [
     "UNDEMONSTRATED",
     "FEEDBACK_MODES",
     "FEEDBACK_POLICIES",
+    "SELECTORS",
+    "SelectionContext",
+    "Selector",
+    "select",
     "Visibility",
     "reveal",
     "FeedbackRecord",

@@ -16,7 +16,19 @@ all        every realisation, :math:`r = \hat R` (VF, VR)            yes
 replay     the realisation for the demo's own condition (RF)        no
 batch      a fixed subset of :math:`\hat B` (BF: 4 corners, centre)  no
 selected   the conditions the teacher asks for (SF)                 no
+adaptive   k conditions a selector picks after each demo (AF)       no
 ========== ======================================================= ===========
+
+The first five are the paper's. ``adaptive`` is beyond it (the paper's open question:
+choosing r automatically): the selectors of :mod:`tutor.framework.selectors` pick k
+conditions of :math:`\hat B` from the demos and the learner, e.g. where the frames'
+regressions disagree most,
+
+.. math::
+
+    D(c) = \frac{1}{T} \sum_{t} \sum_{j} (\xi_j - \mu)^\top \Sigma_j^{-1} (\xi_j - \mu),
+
+combined with the distance to the demos. Like BF it withholds the totals.
 
 After the run (and in a practice run) everything is revealed: :func:`reveal`.
 Warnings about the demo itself (incorrect, ambiguous) need only the demo and stay in
@@ -44,7 +56,7 @@ class FeedbackPolicy:
 
     ``shown(n, own, batch, selected)`` gives r as indices into B^: ``n`` = |B^|, ``own``
     the index of the demo's own condition, ``batch`` the fixed subset, ``selected`` the
-    conditions asked for.
+    conditions asked for (SF) or picked by the selector (adaptive).
     """
 
     name: str
@@ -54,11 +66,12 @@ class FeedbackPolicy:
     def shown(self, n: int, own: int, batch, selected) -> np.ndarray:
         if self.name == "all":
             return np.arange(n)
-        pick = {"replay": [own], "batch": batch, "selected": selected}.get(self.name, [])
+        pick = {"replay": [own], "batch": batch, "selected": selected, "adaptive": selected}
+        pick = pick.get(self.name, [])
         return np.asarray(pick, dtype=int).ravel().copy()
 
 
-#: the policies by name (the paper's five)
+#: the policies by name (the paper's five, then adaptive)
 FEEDBACK_POLICIES = {
     p.name: p
     for p in (
@@ -67,6 +80,7 @@ FEEDBACK_POLICIES = {
         FeedbackPolicy("replay", False, "the demo's own condition replayed (RF)"),
         FeedbackPolicy("batch", False, "a fixed batch of conditions after every demo (BF)"),
         FeedbackPolicy("selected", False, "the conditions the teacher asks for (SF)"),
+        FeedbackPolicy("adaptive", False, "k conditions a selector picks after every demo (AF)"),
     )
 }
 

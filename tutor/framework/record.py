@@ -9,9 +9,9 @@ an educator and read back by the class analysis. It holds:
 - every *attempt*: Reset, or a Load that replaces the run, starts a new attempt and
   keeps the old one, so nothing a trainee did is ever deleted (:class:`Attempt`);
 - in each attempt the demonstration set :math:`b` in order (:class:`Demo`: the samples,
-  the condition it was meant for, what the trainee asked to see (SF), its cost on the
-  Experiment 2 clock, whether it followed VR's rule), the robot tests asked for
-  (:class:`Test`), other clock time and the finished flag;
+  the condition it was meant for, what the trainee asked to see (SF) or the selector
+  picked (AF), its cost on the Experiment 2 clock, whether it followed VR's rule), the
+  robot tests asked for (:class:`Test`), other clock time and the finished flag;
 - every event in order (:class:`Event`: add, undo, load, reset, test, finish, ...), with a
   wall-clock stamp;
 - whether it was a practice run (the class analysis leaves those out) and the version
@@ -220,7 +220,9 @@ class Demo:
         The test condition it was meant for (e.g. the plant chosen); None when the task
         reads it off the demo.
     shown : tuple of int or None
-        SF: the test conditions the trainee asked to see after it; None otherwise.
+        SF: the test conditions the trainee asked to see after it; AF (an "adaptive"
+        condition): the conditions the selector picked after it, in the order picked;
+        None otherwise.
     seconds : float or None
         Experiment 2: what the demo cost on the clock (its duration).
     followed_rule : bool or None

@@ -14,6 +14,9 @@ trainee did is deleted.
 A task's protocol subclasses :class:`TeachingRun` and names its conditions (the paper's
 NF/VF/VR for the maze, NF/RF/BF/SF for pick-and-place) with the feedback mode of each
 (what the set :math:`r` of shown realisations is; see :mod:`tutor.framework.session`).
+A condition in ``"adaptive"`` mode (AF, beyond the paper) names its selector and k in
+:attr:`TeachingRun.adaptive`; each demo's picks are stored in its ``Demo.shown``, so a
+saved run replays with the same :math:`r` whatever the selector (even a random one).
 """
 
 from __future__ import annotations
@@ -51,6 +54,12 @@ class TeachingRun:
         The run to continue; its current attempt's demos are replayed into the learner.
     clock : callable, optional
         Gives the wall-clock stamp of each event (default :func:`utc_now`).
+    selector, k : optional
+        An ``"adaptive"`` condition's selector (a name or a
+        :class:`~tutor.framework.selectors.Selector`) and k, instead of the ones
+        :attr:`adaptive` names for it.
+    rng : int, numpy Generator or None
+        The random selectors' generator (``"adaptive"`` conditions).
 
     Raises
     ------
@@ -64,10 +73,15 @@ class TeachingRun:
     conditions: ClassVar[dict[str, str]] = {}
     #: the paper's scoring rule for the experiment (:data:`tutor.framework.metrics.SCORING_RULES`)
     score_rule: ClassVar[str] = "target"
+    #: "adaptive" conditions: condition -> (selector name, k) (:mod:`.selectors`)
+    adaptive: ClassVar[dict[str, tuple[str, int]]] = {}
 
-    def __init__(self, task: Task, record: RunRecord, clock=utc_now):
+    def __init__(
+        self, task: Task, record: RunRecord, clock=utc_now, *, selector=None, k=None, rng=None
+    ):
         self.task = task
         self.clock = clock
+        self._adaptive_options = {"selector": selector, "k": k, "rng": rng}
         self._check_record(record)
         self._record = record
         self.session = self._replay(record.current.demos)
@@ -101,14 +115,17 @@ class TeachingRun:
 
     @classmethod
     def new(cls, condition: str, task: Task, clock=utc_now, **options):
-        """A fresh run (``options``: trainee, run, practice; see :meth:`fresh_record`)."""
+        """A fresh run (``options``: trainee, run, practice, see :meth:`fresh_record`;
+        selector, k, rng, see the class)."""
+        adaptive = {key: options.pop(key) for key in ("selector", "k", "rng") if key in options}
         record = cls.fresh_record(condition, task, clock=clock, **options)
-        return cls.from_record(task, record, clock)
+        return cls.from_record(task, record, clock, **adaptive)
 
     @classmethod
-    def from_record(cls, task: Task, record: RunRecord, clock=utc_now):
-        """Continue the run ``record`` (its current attempt's demos are replayed)."""
-        return cls(task, record, clock)
+    def from_record(cls, task: Task, record: RunRecord, clock=utc_now, **adaptive):
+        """Continue the run ``record`` (its current attempt's demos are replayed);
+        ``adaptive``: selector, k, rng (see the class)."""
+        return cls(task, record, clock, **adaptive)
 
     @classmethod
     def check_condition(cls, condition) -> str:
@@ -181,7 +198,33 @@ class TeachingRun:
     def new_session(self) -> TeachingSession:
         """An empty session for this run's feedback mode."""
         batch = self.batch() if self.feedback == "batch" else None
-        return TeachingSession(self.task, feedback=self.feedback, batch=batch)
+        if self.feedback != "adaptive":
+            return TeachingSession(self.task, feedback=self.feedback, batch=batch)
+        selector, k = self.adaptive.get(self.condition, (None, None))
+        options = self._adaptive_options
+        return TeachingSession(
+            self.task,
+            feedback="adaptive",
+            selector=selector if options["selector"] is None else options["selector"],
+            k=k if options["k"] is None else options["k"],
+            rng=self._selector_rng(),
+        )
+
+    def _selector_rng(self):
+        """The random selectors' generator: the one given, shared by every attempt."""
+        if not hasattr(self, "_rng"):
+            self._rng = np.random.default_rng(self._adaptive_options["rng"])
+        return self._rng
+
+    @property
+    def selector(self):
+        """The selector of an ``"adaptive"`` condition (None in the others)."""
+        return self.session.selector if self.feedback == "adaptive" else None
+
+    @property
+    def k(self) -> int | None:
+        """How many conditions an ``"adaptive"`` condition shows after each demo."""
+        return self.session.k if self.feedback == "adaptive" else None
 
     def _replay(self, demos) -> TeachingSession:
         session = self.new_session()
@@ -189,7 +232,7 @@ class TeachingRun:
             try:
                 session.add_demo(
                     np.asarray(demo.samples, dtype=float),
-                    shown=demo.shown if self.feedback == "selected" else None,
+                    shown=demo.shown if self.feedback in ("selected", "adaptive") else None,
                     condition=None if demo.condition is None else np.asarray(demo.condition),
                 )
             except TutorError as exc:
@@ -244,6 +287,8 @@ class TeachingRun:
         """
         self._check_open()
         record = self.session.add_demo(raw, shown=shown, condition=condition)
+        if self.feedback == "adaptive":
+            shown = record.shown  # the selector's picks, kept so that a replay shows them
         demo = Demo(
             samples=tuple(_floats(row) for row in self.session._demos[-1]),
             condition=None if condition is None else _floats(self.session._conditions[-1]),

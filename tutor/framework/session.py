@@ -19,6 +19,13 @@ Feedback modes (what r is):
 ``"replay"``    r = the realisation for the last demo's own condition (RF).
 ``"batch"``     r = a fixed subset of B^ after every demo (BF).
 ``"selected"``  r = the conditions the teacher asks for (SF).
+``"adaptive"``  r = k conditions a selector picks after each demo (AF; beyond the paper,
+                :mod:`tutor.framework.selectors`).
+
+In ``"adaptive"`` mode the picks are made from the fitted learner, its realisations and
+the demos' conditions (the oracle selector also sees the verdict). A replay that passes
+the picks recorded when a demo was first given (``add_demo(..., shown=picks)``) shows
+them again, so a saved run reads back as it was taught.
 """
 
 from __future__ import annotations
@@ -29,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..tpgmm import check_seed
 from .failures import (
     TeachingWarning,
     Thresholds,
@@ -38,6 +46,7 @@ from .failures import (
 )
 from .feedback import FEEDBACK_POLICIES
 from .metrics import SessionScore, efficacy, efficiency, run_score
+from .selectors import DEFAULT_K, DEFAULT_SELECTOR, SelectionContext, check_k, check_selector
 from .task import Task
 
 __all__ = ["FeedbackRecord", "TeachingSession", "FEEDBACK_MODES"]
@@ -102,12 +111,20 @@ class TeachingSession:
     task : Task
     learner : TPGMM, optional
         Defaults to ``task.make_learner()``.
-    feedback : {"none", "all", "replay", "batch", "selected"}
+    feedback : {"none", "all", "replay", "batch", "selected", "adaptive"}
         What the teacher is shown after each demo (see the module docstring).
     thresholds : Thresholds, optional
         Failure thresholds; defaults documented in :class:`Thresholds`.
     batch : sequence of int, optional
         Indices into ``task.conditions`` shown in ``"batch"`` mode.
+    selector : str or Selector, optional
+        ``"adaptive"`` mode: a name in :data:`tutor.framework.selectors.SELECTORS`
+        (default ``"disagreement"``) or a :class:`~tutor.framework.selectors.Selector`.
+    k : int, optional
+        ``"adaptive"`` mode: how many conditions are shown after each demo (default 5;
+        a k above |B^| shows them all).
+    rng : int, numpy Generator or None
+        ``"adaptive"`` mode: the generator of the random selectors (seeded from it).
     """
 
     def __init__(
@@ -117,6 +134,9 @@ class TeachingSession:
         feedback: str = "all",
         thresholds: Thresholds | None = None,
         batch=None,
+        selector=None,
+        k=None,
+        rng=None,
     ):
         if feedback not in FEEDBACK_MODES:
             raise InvalidParameterError(
@@ -134,6 +154,13 @@ class TeachingSession:
         self.feedback = feedback
         self.thresholds = Thresholds() if thresholds is None else thresholds
         self.batch = batch
+        if feedback != "adaptive" and (selector is not None or k is not None):
+            raise InvalidParameterError(
+                f"selector= and k= are only used with feedback='adaptive', not {feedback!r}"
+            )
+        self.selector = check_selector(DEFAULT_SELECTOR if selector is None else selector)
+        self.k = check_k(DEFAULT_K if k is None else k)
+        self.rng = np.random.default_rng(check_seed(rng, "rng"))
         self._fresh_learner = learner if learner is not None else task.make_learner()
         self._demos: list[np.ndarray] = []
         self._conditions: list[np.ndarray] = []
@@ -202,7 +229,9 @@ class TeachingSession:
         raw : array-like
             A recording the task's ``preprocess`` accepts (e.g. (T, 3) of t, x, y).
         shown : sequence of int, optional
-            In ``"selected"`` mode: the test conditions the teacher asks to see.
+            In ``"selected"`` mode: the test conditions the teacher asks to see. In
+            ``"adaptive"`` mode: the picks recorded when this demo was first given (a
+            replay); None picks them now.
         condition : array-like, optional
             The condition the teacher meant to demonstrate (e.g. the plant they chose);
             by default the task reads it off the demo (``task.condition_of``).
@@ -216,11 +245,12 @@ class TeachingSession:
         demo = task.preprocess(raw)
         cond = self._check_condition(demo, condition)
         selected = self._check_shown(shown)
+        replayed = shown is not None
         demos = [*self._demos, demo]
         conds = [*self._conditions, cond]
         learner = copy.deepcopy(self.learner)
         learner.fit(demos, [task.frames(c) for c in conds])
-        record, realisations = self._evaluate(learner, demos, conds, selected)
+        record, realisations = self._evaluate(learner, demos, conds, selected, replayed)
         self._demos.append(demo)
         self._conditions.append(cond)
         self._learners.append(learner)
@@ -252,8 +282,9 @@ class TeachingSession:
         shown = [r.shown for r in self._history[number:]]
         for stack in self._stacks:
             del stack[number - 1 :]
+        keep = self.feedback in ("selected", "adaptive")  # what was shown stays what was shown
         for demo, cond, sel in zip(later, later_conditions, shown, strict=True):
-            self.add_demo(demo, shown=sel if self.feedback == "selected" else None, condition=cond)
+            self.add_demo(demo, shown=sel if keep else None, condition=cond)
         return self.latest
 
     def reset(self) -> None:
@@ -264,8 +295,11 @@ class TeachingSession:
     def _check_shown(self, shown) -> np.ndarray:
         if shown is None:
             return np.zeros(0, dtype=int)
-        if self.feedback != "selected":
-            raise InvalidParameterError("shown= is only used with feedback='selected'")
+        if self.feedback not in ("selected", "adaptive"):
+            raise InvalidParameterError(
+                "shown= is only used with feedback='selected' (the conditions asked for) or "
+                "'adaptive' (the picks of a replayed demo)"
+            )
         idx = np.asarray(shown, dtype=int).ravel()
         n = len(self.task.conditions)
         if np.any((idx < 0) | (idx >= n)):
@@ -288,7 +322,7 @@ class TeachingSession:
             )
         return cond
 
-    def _evaluate(self, learner, demos, conds, selected):
+    def _evaluate(self, learner, demos, conds, selected, replayed=False):
         task, thr = self.task, self.thresholds
         conditions = task.conditions
         context = task.criteria_context(demos, np.array(conds))
@@ -309,6 +343,8 @@ class TeachingSession:
             else np.zeros(len(conditions), dtype=bool)
         )
         undemonstrated = ~verdict.passed & ~demonstrated
+        if self.feedback == "adaptive" and not replayed:
+            selected = self._adaptive_picks(learner, conds, mean, verdict.passed)
         shown = self._shown(conds[-1], selected)
         delta_a = thr.ambiguity_distance
         if delta_a is None:
@@ -348,6 +384,21 @@ class TeachingSession:
             warnings=tuple(warnings),
         )
         return record, mean
+
+    def _adaptive_picks(self, learner, conds, realisations, passed) -> np.ndarray:
+        """The selector's k picks after this demo (``"adaptive"`` mode)."""
+        task = self.task
+        context = SelectionContext(
+            conditions=np.asarray(task.conditions),
+            demo_conditions=np.array(conds),
+            learner=learner,
+            frames=task.frame_batch(task.conditions),
+            times=task.times,
+            realisations=realisations,
+            passed=passed,
+            rng=self.rng,
+        )
+        return self.selector(self.k, context)
 
     def _shown(self, condition, selected) -> np.ndarray:
         """r for this step, from the feedback policy (:mod:`tutor.framework.feedback`)."""

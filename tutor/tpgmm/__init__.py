@@ -41,6 +41,8 @@ checks
     The ``check_*`` validators of every input (demos, times, settings, seeds).
 frames
     :class:`Frame` and :class:`FrameBatch`, the task parameters.
+frame_views
+    Each frame's regression mapped into the world, and the frames' disagreement.
 model
     :class:`TPGMM`: data preparation, fit, score, reproduce.
 em
@@ -76,6 +78,7 @@ from .checks import (
     check_seed,
     check_times,
 )
+from .frame_views import frame_disagreement, frame_views
 from .frames import Frame, FrameBatch, check_frame_matrix, check_frame_row
 from .model import TPGMM
 
@@ -93,4 +96,6 @@ __all__ = [
     "check_real_array",
     "check_seed",
     "check_times",
+    "frame_disagreement",
+    "frame_views",
 ]
