@@ -4,7 +4,10 @@ Experiment 1 (maze), within subjects: N teachers (paper: 30), each teaches under
 VF and VR (in that order, as in the paper; nothing carries over between conditions).
 Experiment 2 (pick-and-place), between subjects: N teachers (paper: 36), a quarter
 in each of NF, RF, BF and SF (teacher i is in condition ``i // (N / 4)``), three
-15-minute runs each.
+15-minute runs each. ``conditions=`` adds conditions beyond the paper (e.g.
+``("NF", "RF", "BF", "SF", "AF")``, AF the adaptive feedback of
+:mod:`tutor.framework.selectors`); teachers are then split evenly over those. The
+default is the paper's four.
 
 Reproducibility: each teacher's randomness comes from
 ``numpy.random.SeedSequence([seed, experiment, teacher, stream])`` (stream 0 draws the
@@ -47,6 +50,7 @@ __all__ = [
     "check_request",
     "MAX_TEACHERS",
     "min_teachers",
+    "check_conditions",
 ]
 
 EXPERIMENTS = {
@@ -57,7 +61,36 @@ EXPERIMENTS = {
 
 
 
-def min_teachers(experiment: int) -> int:
+def check_conditions(experiment: int, conditions=None) -> tuple[str, ...]:
+    """The conditions of a cohort: the paper's by default; Experiment 2 may add AF.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a sequence of distinct known conditions (Experiment 1 has only its own three).
+    """
+    paper = EXPERIMENTS[experiment]["conditions"] if experiment in EXPERIMENTS else ()
+    if conditions is None:
+        return tuple(paper)
+    if experiment == 2:
+        from ..tasks.pickplace_protocol import ALL_CONDITIONS as known
+    else:
+        known = paper
+    if isinstance(conditions, str):
+        conditions = (conditions,)
+    try:
+        chosen = tuple(conditions)
+    except TypeError:
+        chosen = ()
+    if not chosen or len(set(chosen)) != len(chosen) or any(c not in known for c in chosen):
+        raise InvalidParameterError(
+            f"conditions must be distinct conditions of Experiment {experiment} "
+            f"({', '.join(known)}), e.g. {tuple(known)!r}; got {conditions!r}"
+        )
+    return chosen
+
+
+def min_teachers(experiment: int, conditions=None) -> int:
     """The smallest cohort whose statistics can be computed.
 
     Experiment 1 (within subjects, k conditions) needs n >= k: Mauchly's sphericity test
@@ -65,7 +98,7 @@ def min_teachers(experiment: int) -> int:
     of freedom, and with n = k - 1 its correction factor divides by zero. Experiment 2
     (between subjects) needs 2 teachers per condition for a variance within each group.
     """
-    k = len(EXPERIMENTS[experiment]["conditions"])
+    k = len(check_conditions(experiment, conditions))
     return k if experiment == 1 else 2 * k
 
 
@@ -117,17 +150,24 @@ class CohortResult:
     settings: StudySettings = field(default_factory=StudySettings)
 
 
-def check_request(experiment, n=None, seed=0) -> tuple[int, int, int]:
-    """Validate (experiment, n, seed); returns them with n defaulted to the paper's."""
+def check_request(experiment, n=None, seed=0, conditions=None) -> tuple[int, int, int]:
+    """Validate (experiment, n, seed); returns them with n defaulted to the paper's.
+
+    ``conditions`` (Experiment 2, see :func:`check_conditions`) changes how many
+    teachers there must be: a multiple of the number of conditions, 2 each at least.
+    """
     if experiment not in EXPERIMENTS:
         raise InvalidParameterError(
             f"experiment must be 1 (maze) or 2 (pick-and-place), got {experiment!r}"
         )
     spec = EXPERIMENTS[experiment]
-    n = spec["n"] if n is None else n
+    chosen = check_conditions(experiment, conditions)
+    n = spec["n"] if n is None and conditions is None else n
+    if n is None:  # the paper's 9 per condition
+        n = spec["n"] // len(spec["conditions"]) * len(chosen)
     if not isinstance(n, int | np.integer) or isinstance(n, bool):
         raise InvalidParameterError(f"the number of teachers must be an integer, got {n!r}")
-    k, smallest = len(spec["conditions"]), min_teachers(experiment)
+    k, smallest = len(chosen), min_teachers(experiment, chosen)
     if n > MAX_TEACHERS:
         raise InvalidParameterError(
             f"Experiment {experiment} can simulate at most {MAX_TEACHERS} teachers (100 times "
@@ -141,7 +181,7 @@ def check_request(experiment, n=None, seed=0) -> tuple[int, int, int]:
     if experiment == 2 and (n < smallest or n % k):
         raise InvalidParameterError(
             f"Experiment 2 needs a multiple of {k} teachers, at least {smallest} (2 per "
-            f"condition), got n = {n}; the paper used 36"
+            f"condition), got n = {n}; the paper used 36 for its 4"
         )
     if not isinstance(seed, int | np.integer) or isinstance(seed, bool) or seed < 0:
         raise InvalidParameterError(f"the seed must be a whole number >= 0, got {seed!r}")
@@ -229,15 +269,17 @@ def teach_runs(
     n: int,
     population: Population = DEFAULT_POPULATION,
     settings: StudySettings = StudySettings(),
+    conditions=None,
 ):
     """One simulated teacher's runs, in the order they are taught.
 
     Yields ``(traits, number, run)``: the teacher's
     :class:`~tutor.teachers.traits.TeacherTraits`, the run's number and the finished
     :class:`~tutor.framework.run.TeachingRun` (Experiment 1: NF, VF, VR, each run 1;
-    Experiment 2: runs 1-3 of the teacher's condition, ``teacher // (n / 4)``).
+    Experiment 2: runs 1-3 of the teacher's condition, ``teacher // (n / k)`` of the k
+    ``conditions``, by default the paper's four).
     """
-    spec = EXPERIMENTS[experiment]
+    spec = {**EXPERIMENTS[experiment], "conditions": check_conditions(experiment, conditions)}
     traits = population.sample(_rng(seed, experiment, teacher, 0))
     if experiment == 1:
         from ..teachers.maze import MazeTeacher
@@ -277,10 +319,12 @@ def simulate_teacher(
     n: int,
     population: Population = DEFAULT_POPULATION,
     settings: StudySettings = StudySettings(),
+    conditions=None,
 ):
     """Simulate one teacher of a cohort end to end; returns (run rows, demo rows)."""
     rows, demo_rows = [], []
-    for traits, number, run in teach_runs(experiment, teacher, seed, n, population, settings):
+    runs = teach_runs(experiment, teacher, seed, n, population, settings, conditions)
+    for traits, number, run in runs:
         trait_cols = {f"trait_{k}": v for k, v in traits.to_dict().items() if k != "plan_focus"}
         base = {"teacher": teacher, "condition": run.condition, "run": number}
         row, drows = rows_of(run, base, settings)
@@ -319,6 +363,7 @@ def run_experiment(
     progress: bool | Callable = True,
     population: Population = DEFAULT_POPULATION,
     settings: StudySettings = StudySettings(),
+    conditions=None,
 ) -> CohortResult:
     """Simulate a whole cohort of Experiment 1 or 2.
 
@@ -336,12 +381,16 @@ def run_experiment(
         Show a tqdm progress bar (one step per teacher).
     population : Population
     settings : StudySettings
+    conditions : sequence of str, optional
+        Experiment 2's conditions (default the paper's NF, RF, BF, SF; AF may be added,
+        see :func:`check_conditions`). ``n`` then defaults to 9 per condition.
 
     Returns
     -------
     CohortResult
     """
-    experiment, n, seed = check_request(experiment, n, seed)
+    experiment, n, seed = check_request(experiment, n, seed, conditions)
+    chosen = check_conditions(experiment, conditions)
     if workers is None:
         workers = min(os.cpu_count() or 1, n)
     if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
@@ -358,7 +407,9 @@ def run_experiment(
         if workers == 1:
             _limit_threads()
             for i in range(n):
-                results[i] = simulate_teacher(experiment, i, seed, n, population, settings)
+                results[i] = simulate_teacher(
+                    experiment, i, seed, n, population, settings, conditions
+                )
                 if bar is not None:
                     bar.update(1)
         else:
@@ -367,7 +418,9 @@ def run_experiment(
             ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
             with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
                 futures = {
-                    pool.submit(simulate_teacher, experiment, i, seed, n, population, settings): i
+                    pool.submit(
+                        simulate_teacher, experiment, i, seed, n, population, settings, conditions
+                    ): i
                     for i in range(n)
                 }
                 for fut in as_completed(futures):
@@ -381,7 +434,7 @@ def run_experiment(
     demo_rows = [r for i in sorted(results) for r in results[i][1]]
     runs = pd.DataFrame(rows)
     demos = pd.DataFrame(demo_rows)
-    order = list(EXPERIMENTS[experiment]["conditions"])
+    order = list(chosen)
     for frame in (runs, demos):
         frame["condition"] = pd.Categorical(frame["condition"], categories=order, ordered=True)
     runs = runs.sort_values(["teacher", "run", "condition"], kind="stable").reset_index(drop=True)

@@ -6,12 +6,18 @@ BF  batch: after each demo the robot performs the five generalisation samples
     (the four corner plants and the centre one).
 SF  selected: the teacher chooses when and which plants the robot tries.
 
+Beyond the paper (its open question, choosing r automatically):
+
+AF  adaptive: after each demo the robot tries the k = 5 plants a selector picks from the
+    demos and what the robot learnt (by default where the frames' regressions disagree
+    most, or far from every demo: :mod:`tutor.framework.selectors`). Same cost as BF.
+
 The clock the paper's teachers lived by: a demonstration costs its own duration, every
 realisation the robot performs costs 25 s (a real arm is slow), and a teaching run is
 capped at 15 minutes. Each trainee does three runs.
 
 The cap, as the paper ran it: a demonstration that cannot finish before 15:00, with the
-robot's attempts its condition then shows (RF 1, BF 5, x 25 s), is not started, and the
+robot's attempts its condition then shows (RF 1, BF 5, AF k, x 25 s), is not started, and the
 run ends with the last complete demonstration. :meth:`PickPlaceRun.demonstrate` refuses
 such a demo with a :class:`RunOverError` that says how much time is left (a refusal
 changes nothing); the run is over once not even the shortest demonstration fits
@@ -29,9 +35,25 @@ from ..framework.record import utc_now
 from .kinesthetic import CARRY_SECONDS, PAUSE_SECONDS, REACH_SECONDS
 from .pickplace import PickPlaceTask
 
-__all__ = ["CONDITIONS", "PickPlaceRun", "RunOverError", "RUNS", "SHORTEST_DEMO_SECONDS"]
+__all__ = [
+    "ADAPTIVE",
+    "ALL_CONDITIONS",
+    "CONDITIONS",
+    "EXTRA_CONDITIONS",
+    "PickPlaceRun",
+    "RunOverError",
+    "RUNS",
+    "SHORTEST_DEMO_SECONDS",
+]
 
+#: the paper's four conditions (condition -> feedback mode), in the paper's order
 CONDITIONS = {"NF": "none", "RF": "replay", "BF": "batch", "SF": "selected"}
+#: conditions beyond the paper (offered as extras, never by default)
+EXTRA_CONDITIONS = {"AF": "adaptive"}
+#: every condition a run can be in
+ALL_CONDITIONS = {**CONDITIONS, **EXTRA_CONDITIONS}
+#: the adaptive conditions' selector and k (k = 5 plants: BF's cost)
+ADAPTIVE = {"AF": ("disagreement", 5)}
 #: each trainee teaches three runs in their condition
 RUNS = 3
 #: The shortest demonstration a person gives (s): the simulated hand's fastest pace
@@ -54,28 +76,34 @@ class PickPlaceRun(TeachingRun):
     ``PickPlaceRun(condition, task)``; resume one with ``PickPlaceRun(task=task,
     record=record)``. The clock is read from the run record: each demo's ``seconds``,
     the robot tests asked for during the run, and ``other_seconds``.
+
+    An AF run takes ``selector=``, ``k=`` and ``rng=`` (the random selectors'
+    generator) besides the record options; by default AF shows 5 plants picked by
+    frame disagreement (:data:`ADAPTIVE`).
     """
 
     experiment = 2
-    conditions = CONDITIONS
+    conditions = ALL_CONDITIONS
+    adaptive = ADAPTIVE
     score_rule = "final"
 
     def __init__(self, condition=None, task: PickPlaceTask | None = None, record=None, **new):
         task = PickPlaceTask() if task is None else task
         clock = new.pop("clock", utc_now)
+        adaptive = {key: new.pop(key) for key in ("selector", "k", "rng") if key in new}
         if record is None:
             record = self.fresh_record(condition, task, clock=clock, **new)
         elif condition is not None and condition != record.condition:
             raise InvalidParameterError(f"the record is a {record.condition} run, not {condition}")
-        super().__init__(task, record, clock)
+        super().__init__(task, record, clock, **adaptive)
 
     @classmethod
     def new(cls, condition, task, clock=utc_now, **options):
         return cls(condition, task, clock=clock, **options)
 
     @classmethod
-    def from_record(cls, task, record, clock=utc_now):
-        return cls(task=task, record=record, clock=clock)
+    def from_record(cls, task, record, clock=utc_now, **adaptive):
+        return cls(task=task, record=record, clock=clock, **adaptive)
 
     def batch(self) -> np.ndarray:
         return self.task.scene.generalisation_indices
@@ -109,8 +137,11 @@ class PickPlaceRun(TeachingRun):
     @property
     def feedback_seconds(self) -> float:
         """Seconds of the robot's attempts the condition shows after each demo (RF 25, BF
-        125, NF and SF 0: SF's tests are asked for and paid for one by one)."""
-        shown = {"replay": 1, "batch": len(self.batch())}.get(self.feedback, 0)
+        125, AF 25 k, NF and SF 0: SF's tests are asked for and paid for one by one)."""
+        n = len(self.task.conditions)
+        adaptive = min(self.k, n) if self.feedback == "adaptive" else 0
+        shown = {"replay": 1, "batch": len(self.batch()), "adaptive": adaptive}
+        shown = shown.get(self.feedback, 0)
         return self.realisation_seconds * shown
 
     def demo_cost(self, seconds: float) -> float:

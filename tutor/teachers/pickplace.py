@@ -1,4 +1,4 @@
-"""Simulated teachers of Experiment 2 (pick-and-place): NF, RF, BF and SF.
+"""Simulated teachers of Experiment 2 (pick-and-place): NF, RF, BF and SF (and AF).
 
 One :class:`PickPlaceTeacher` (one person's traits) teaches three runs of
 :class:`~tutor.tasks.pickplace_protocol.PickPlaceRun` in their condition. The condition
@@ -15,6 +15,9 @@ BF  the robot tries the four corner plants and the centre one after every demo
     (125 s): they read these five and aim the next demo at a failing one.
 SF  they ask the robot to try plants now and then (25 s each), choosing as novices
     do: mostly plants they demonstrated or their neighbours.
+AF  (beyond the paper) the robot tries the k plants a selector picks after every demo
+    (25 s each): they read them exactly as BF's five (same belief, same aiming at a
+    failing one, same traits); only which plants are shown differs.
 
 Between runs a teacher remembers the plants they saw the robot fail at (during the
 run, or for NF in the tests they choose after it) and starts the next run's plan there.
@@ -31,12 +34,13 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..tasks.pickplace import PickPlaceTask
-from ..tasks.pickplace_protocol import CONDITIONS, PickPlaceRun
+from ..tasks.pickplace_protocol import ALL_CONDITIONS, CONDITIONS, PickPlaceRun
 from .model import SIMULATED, TeacherModel, simulated_clock
 from .traits import TeacherTraits
 
 __all__ = ["PickPlaceTeacher", "PICKPLACE_CONDITIONS", "NOVICE_TEST_NEAR", "MAX_RETRIES"]
 
+#: the paper's four conditions (AF, beyond the paper, is in ALL_CONDITIONS)
 PICKPLACE_CONDITIONS = tuple(CONDITIONS)
 #: SF: share of a novice's test choices that are a demonstrated plant or its neighbour
 NOVICE_TEST_NEAR = 0.8
@@ -78,23 +82,37 @@ class PickPlaceTeacher:
         lo, hi = plants.min(axis=0), plants.max(axis=0)
         return TeacherModel(self.traits, rng, plants, lo, hi, "pickplace")
 
-    def teach(self, condition: str, rng, run: PickPlaceRun | None = None) -> PickPlaceRun:
+    def teach(
+        self, condition: str, rng, run: PickPlaceRun | None = None, **adaptive
+    ) -> PickPlaceRun:
         """Teach one 15-minute run under ``condition``; returns the finished run.
+
+        ``adaptive`` (AF only): ``selector=`` and ``k=`` instead of AF's defaults. The
+        random selectors draw from a generator spawned from ``rng`` (the teacher's own
+        draws are unchanged by it).
 
         Its record tells the story: each demo's ``chosen_by`` (why the plant was chosen:
         "plan", "red", "retry") and ``mistake`` ("wrong_plant" when the hand slipped), the
         undo events (retries) and the attempt's ``stopped`` ("satisfied", "patience" or
         "time").
         """
-        if condition not in CONDITIONS:
+        if condition not in ALL_CONDITIONS:
             raise InvalidParameterError(
-                f"pick-and-place condition must be one of {', '.join(CONDITIONS)}, "
+                f"pick-and-place condition must be one of {', '.join(ALL_CONDITIONS)}, "
                 f"got {condition!r}"
+            )
+        if adaptive and ALL_CONDITIONS[condition] != "adaptive":
+            raise InvalidParameterError(
+                f"selector= and k= are only for the adaptive conditions, not {condition}"
             )
         rng = np.random.default_rng(rng)
         t = self.traits
         if run is None:
-            run = PickPlaceRun(condition, self.task, trainee=SIMULATED, clock=simulated_clock)
+            if ALL_CONDITIONS[condition] == "adaptive":
+                adaptive["rng"] = rng.spawn(1)[0]
+            run = PickPlaceRun(
+                condition, self.task, trainee=SIMULATED, clock=simulated_clock, **adaptive
+            )
         model = self._model(rng)
         model.lessons = list(self.lessons)
         retry, tries = None, 0

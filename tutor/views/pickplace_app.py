@@ -3,7 +3,8 @@
 The trainee clicks a plant on the tray map, then *Demonstrate*: the tutor guides the
 arm to that plant as a person would in kinesthetic teaching (optionally with a
 mistake, to see what it does). What the robot then shows depends on the condition
-(NF, RF, BF, SF; see :mod:`tutor.tasks.pickplace_protocol`), and the clock counts the
+(NF, RF, BF, SF; and AF, beyond the paper, whose picks the tray map shows as it shows
+BF's batch; see :mod:`tutor.tasks.pickplace_protocol`), and the clock counts the
 teaching time the paper's trainees had (15 minutes; 25 s per robot attempt).
 
 Tray colours (as in the paper's good-versus-bad figure): green, the robot succeeds;
@@ -78,7 +79,7 @@ class PickPlaceTutor(TutorApp):
 
     Parameters
     ----------
-    condition : {"NF", "RF", "BF", "SF"}
+    condition : {"NF", "RF", "BF", "SF", "AF"}
     session_file : path, optional
         Autosave after every demonstration; an existing file of the same run is resumed.
     task : PickPlaceTask, optional
@@ -403,13 +404,20 @@ class PickPlaceTutor(TutorApp):
             + "</ul>"
         )
         if run.finished and rec is not None:
-            summary = finish_summary(run, PAPER_MEAN_ETA[run.condition], "mean over three runs")
+            paper = paper_condition(run.condition)
+            summary = finish_summary(run, PAPER_MEAN_ETA[paper], "mean over three runs", paper)
             parts.append(f"<div class='lfd-score'><b>Run over.</b> {html.escape(summary)}</div>")
         parts.append(self.message_html())
         self.panel.value = "".join(parts)
         self._refresh_common()
         if self.scene3d is not None:
             self.scene3d.update(run, status)
+
+
+def paper_condition(condition: str) -> str:
+    """The paper's condition a run's score is compared with: its own, or for AF (beyond
+    the paper) BF, which shows as many robot attempts and so costs the same time."""
+    return condition if condition in PAPER_MEAN_ETA else "BF"
 
 
 def compare_runs(tutors) -> str:
@@ -429,9 +437,11 @@ def compare_runs(tutors) -> str:
         )
     if not etas:
         return "\n".join(lines)
-    cond = tutors[0].run.condition
+    own = tutors[0].run.condition
+    cond = paper_condition(own)
+    beyond = "" if cond == own else f" ({own} is beyond the paper; {cond} costs the same)"
     lines.append(
-        f"\nYour mean eta: {np.mean(etas):.1%}. The paper's 9 trainees in {cond}: mean "
+        f"\nYour mean eta: {np.mean(etas):.1%}. The paper's 9 trainees in {cond}{beyond}: mean "
         f"{PAPER_MEAN_ETA[cond]:.1%} over the runs, {PAPER_THIRD_RUN_ETA[cond]:.1%} in the third."
     )
     lines.append(

@@ -10,7 +10,10 @@ instruction and worked example (:mod:`tutor.views.worked_example`):
   trainee has ever seen what the robot learns (as in the paper); finished runs stay on
   the page, with what they revealed.
 - Experiment 2 (:func:`pick_and_place_experiment`): runs 1, 2 and 3 in the chosen
-  condition, one after another in the same way.
+  condition, one after another in the same way. The paper's four conditions come first
+  (the default is BF); AF, adaptive feedback, is offered after them as an extra
+  condition *beyond the paper* (the robot tries the 5 plants it picks itself, at BF's
+  cost; :mod:`tutor.framework.selectors`).
 
 When every run is finished the trainee's scores are shown beside the paper's.
 
@@ -25,7 +28,8 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
     The trainee's name (see :func:`tutor.runtime.default_trainee`); the name field is
     then locked. Without it, ``JUPYTERHUB_USER`` is the default on a hub.
 ``TUTOR_CONDITION``
-    Experiment 2's condition (NF, RF, BF or SF) for everyone on this server; the
+    Experiment 2's condition (NF, RF, BF or SF; or AF, beyond the paper) for everyone
+    on this server; the
     condition buttons are then locked and say why. A value that is not a condition is
     refused with a message. It wins over the class plan.
 ``TUTOR_CLASS_PLAN``
@@ -64,8 +68,8 @@ from ..runtime import (
     trainee_key,
 )
 from ..tasks.maze_run import PHASE_ORDER
+from ..tasks.pickplace_protocol import ALL_CONDITIONS, EXTRA_CONDITIONS, RUNS
 from ..tasks.pickplace_protocol import CONDITIONS as PICKPLACE_CONDITIONS
-from ..tasks.pickplace_protocol import RUNS
 from .worked_example import instruction_widget
 
 __all__ = [
@@ -90,6 +94,21 @@ PICKPLACE_AUTOPLAY = {
 }
 #: the condition offered first when neither the trainee nor the educator chose one
 DEFAULT_CONDITION = "BF"
+#: what each condition's button says on hover; AF's says it is beyond the paper
+CONDITION_TIPS = {
+    "NF": "NF: no feedback while teaching",
+    "RF": "RF: the robot replays the plant you demonstrated",
+    "BF": "BF: the robot tries five sample plants after each demo",
+    "SF": "SF: you choose which plants the robot tries",
+    "AF": "AF (beyond the paper): the robot tries the five plants it picks itself",
+}
+#: the line under the condition buttons that says what AF is
+BEYOND_THE_PAPER = (
+    "AF, adaptive feedback, is beyond the paper: after each demonstration the robot "
+    "tries the five plants it finds least certain (where what it learnt from the start, "
+    "the plant and the bin disagrees, or far from your demonstrations), at BF's cost. "
+    "The paper's four conditions are NF, RF, BF and SF."
+)
 
 
 def condition_from_env() -> str | None:
@@ -98,15 +117,17 @@ def condition_from_env() -> str | None:
     Raises
     ------
     InvalidParameterError
-        ``TUTOR_CONDITION`` is set but is not one of NF, RF, BF, SF.
+        ``TUTOR_CONDITION`` is set but is not one of NF, RF, BF, SF (or AF, beyond the
+        paper).
     """
     value = os.environ.get("TUTOR_CONDITION", "").strip()
     if not value:
         return None
-    if value.upper() not in PICKPLACE_CONDITIONS:
+    if value.upper() not in ALL_CONDITIONS:
         raise InvalidParameterError(
             f"TUTOR_CONDITION is {value!r}, which is not a condition of Experiment 2: set it "
-            f"to one of {', '.join(PICKPLACE_CONDITIONS)} (or unset it to let trainees choose)."
+            f"to one of {', '.join(PICKPLACE_CONDITIONS)} (or {', '.join(EXTRA_CONDITIONS)}, "
+            "beyond the paper; or unset it to let trainees choose)."
         )
     return value.upper()
 
@@ -226,7 +247,8 @@ class StartForm:
 
     def _lock_form(self) -> None:
         for field in (self.name, self.practice, self.go, *self._extra_fields):
-            field.disabled = True
+            if field.has_trait("disabled"):  # (a note has nothing to lock)
+                field.disabled = True
 
     def _say(self, text: str, problem: bool = False) -> None:
         self.problem = text if problem else None
@@ -438,22 +460,20 @@ class PickPlaceExperiment(StartForm):
                 text = str(exc)
                 self._condition_problem = f"{text[:1].upper()}{text[1:]} Ask your educator."
         locked = self._fixed_condition is not None or self.class_plan is not None
+        options = [*PICKPLACE_CONDITIONS, *EXTRA_CONDITIONS]  # the paper's four first
         self.condition_buttons = w.ToggleButtons(
-            options=list(PICKPLACE_CONDITIONS),
+            options=options,
             value=self._fixed_condition or DEFAULT_CONDITION,
             description="Condition",
-            tooltips=[
-                "NF: no feedback while teaching",
-                "RF: the robot replays the plant you demonstrated",
-                "BF: the robot tries five sample plants after each demo",
-                "SF: you choose which plants the robot tries",
-            ],
+            tooltips=[CONDITION_TIPS[c] for c in options],
             style={"button_width": "56px"},
             disabled=locked,
         )
         self.condition_buttons.add_class("lfd-start-condition")
+        self.beyond_note = w.HTML(f"<small>{html.escape(BEYOND_THE_PAPER)}</small>")
+        self.beyond_note.add_class("lfd-start-beyond")
         self._follow_plan()
-        return [self.condition_buttons]
+        return [self.condition_buttons, self.beyond_note]
 
     def _follow_plan(self) -> None:
         """Show the class plan's condition for the name in the form (before Start)."""
@@ -519,7 +539,7 @@ class PickPlaceExperiment(StartForm):
         folder = sessions_root() / trainee_key(name)
         return [
             c
-            for c in PICKPLACE_CONDITIONS
+            for c in ALL_CONDITIONS
             if any((folder / run_file_name(2, c, k)).is_file() for k in range(1, RUNS + 1))
         ]
 

@@ -204,14 +204,21 @@ def compose(
     return lines
 
 
-def finish_summary(run, paper: float, statistic: str) -> str:
+def finish_summary(run, paper: float, statistic: str, condition: str | None = None) -> str:
     """The one score of a finished run, by its experiment's rule, beside the paper's.
 
-    ``paper`` is the paper's figure for the run's condition and ``statistic`` its kind
-    ("median" or "mean").
+    ``paper`` is the paper's figure for ``condition`` (default the run's) and
+    ``statistic`` its kind ("median" or "mean"). A condition beyond the paper (AF) is
+    compared with the paper's condition of the same cost (BF).
     """
     if run.n_demos == 0:
         return "No demonstrations were given."
+    beyond = ""
+    if condition is not None and condition != run.condition:
+        beyond = (
+            f" {run.condition} is beyond the paper; {condition} shows as many robot "
+            "attempts after each demonstration, so it costs the same time."
+        )
     s = run.score(TARGET)
     if run.score_rule == "target":
         how = (
@@ -229,7 +236,7 @@ def finish_summary(run, paper: float, statistic: str) -> str:
     return (
         f"{how[0].upper()}{how[1:]}: your teaching efficiency is η = {s.efficiency:.1%} "
         f"(efficacy divided by the number of demonstrations). The paper's {statistic} for "
-        f"{run.condition} was {paper:.1%}."
+        f"{condition or run.condition} was {paper:.1%}.{beyond}"
     )
 
 

@@ -61,6 +61,11 @@ INSTRUCTIONS = {
         "plant to see whether the robot can pick it (25 s each). You see only the plants "
         "you ask for."
     ),
+    (2, "AF"): (
+        "Adaptive (beyond the paper). After each demonstration the robot tries the five "
+        "plants it picks itself, where it is least sure of what it learnt: green "
+        "succeeds, dark red fails. It costs 125 s of your 15 minutes, like BF."
+    ),
 }
 
 #: the plants the pick-and-place example demonstrates, and the ones SF asks to test
@@ -211,6 +216,7 @@ def _pickplace_frames(axes, condition: str) -> None:
         "RF": "2. The robot tries that plant",
         "BF": "2. The robot tries five plants",
         "SF": "2. You see the plants you test",
+        "AF": "2. The robot tries five plants it picks",
     }
     _tray(axes[1], task, shown_after_first, captions[condition])
     if condition == "NF":
