@@ -37,13 +37,21 @@ with :math:`(\xi_j, \Sigma_j)` frame :math:`j`'s regression mapped into the worl
 
 .. math::
 
-    s(c) = \frac{D(c)}{\max_{\hat B} D} + \frac{d(c)}{\max_{\hat B} d}.
+    s(c) = \frac{d(c)}{\max_{\hat B} d}
+        \left(1 + \frac{D(c)}{\max_{\hat B} D}\right).
 
-The distance term is there because :math:`D` alone misses the gaps *between* clusters of
-demos: there the fixed frames see the clusters averaged (a mean between them, a wide
-covariance) and the frame of the condition agrees with that mean, so :math:`D` is small
-where the robot has never been shown anything. Where the frames agree everywhere
-(one frame, or frames that coincide) :math:`D = 0` and the score is the distance alone.
+Why a product with the distance: :math:`D` alone misses the gaps *between* clusters of
+demos and points at the demos themselves. In a gap the fixed frames (the start, the
+bin) see the clusters averaged, a mean between them with a wide covariance, and the
+frame of the condition agrees with that mean, so :math:`D` is near 0 where the robot
+has never been shown anything; at a demonstrated condition the fixed frames still see
+that average while the condition's frame is sure, so :math:`D` is large where the
+robot has been shown exactly what to do (``tests/test_selectors.py`` measures both).
+The distance finds the gaps and scores a demonstrated condition 0; :math:`D` at most
+doubles the score where the frames disagree, so of two conditions as far from the
+demos the one the learner generalises to worse comes first (e.g. across, rather than
+along, a line of demos). Where the frames agree everywhere (one frame, or frames that
+coincide) :math:`D = 0` and the score is the distance alone.
 When no condition is ``min_distance`` from every pick, the next pick is the best of the
 rest, so a selector always shows :math:`\min(k, |\hat B|)` conditions (the same cost
 after every demo); only the oracle shows fewer, when fewer realisations fail.
@@ -226,7 +234,7 @@ class FrameDisagreement(Selector):
         X, Y = normalised_space(context.conditions, context.demo_conditions)
         gap = _distance_to(X, Y)
         gap = np.where(np.isfinite(gap), gap, 0.0)
-        return _unit(D) + _unit(gap)
+        return _unit(gap) * (1.0 + _unit(D))
 
     def pick(self, k, context):
         score = self.scores(context)
