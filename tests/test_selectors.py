@@ -362,3 +362,27 @@ def test_every_selector_costs_at_most_20_ms_per_demo_for_100_plants(task):
     medians = bench.run(task, repeats=7, n_sets=1, steps=(3,))[3]
     assert set(medians) == set(SELECTORS)
     assert all(ms <= bench.TARGET_MS for ms in medians.values()), medians
+
+
+# ---------------------------------------------------------------- the maze: VA
+
+
+def test_the_maze_va_run_shows_k_start_points_and_is_read_as_vf():
+    from tutor.tasks.maze import MazeTask
+    from tutor.tasks.maze_run import CONDITIONS as MAZE_PAPER
+    from tutor.tasks.maze_run import MazeRun
+    from tutor.teachers.maze import MazeTeacher
+    from tutor.teachers.traits import DEFAULT_POPULATION
+
+    task = MazeTask()
+    assert list(MAZE_PAPER) == ["NF", "VF", "VR"]  # the paper's three, unchanged
+    traits = DEFAULT_POPULATION.sample(np.random.default_rng(0))
+    run = MazeTeacher(traits, task).teach("VA", np.random.default_rng(1), k=3)
+    assert all(len(r.shown) == 3 for r in run.session.history)
+    assert not run.visibility().totals or run.finished
+    back = MazeRun.from_dict(run.to_dict(), task)
+    assert [r.shown.tolist() for r in back.session.history] == [
+        r.shown.tolist() for r in run.session.history
+    ]
+    with pytest.raises(InvalidParameterError, match="only for the adaptive conditions"):
+        MazeTeacher(traits, task).teach("VF", 0, k=3)

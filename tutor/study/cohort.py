@@ -62,12 +62,13 @@ EXPERIMENTS = {
 
 
 def check_conditions(experiment: int, conditions=None) -> tuple[str, ...]:
-    """The conditions of a cohort: the paper's by default; Experiment 2 may add AF.
+    """The conditions of a cohort: the paper's by default; Experiment 2 may add AF,
+    Experiment 1 VA (beyond the paper: adaptive feedback).
 
     Raises
     ------
     InvalidParameterError
-        Not a sequence of distinct known conditions (Experiment 1 has only its own three).
+        Not a sequence of distinct known conditions of the experiment.
     """
     paper = EXPERIMENTS[experiment]["conditions"] if experiment in EXPERIMENTS else ()
     if conditions is None:
@@ -75,7 +76,7 @@ def check_conditions(experiment: int, conditions=None) -> tuple[str, ...]:
     if experiment == 2:
         from ..tasks.pickplace_protocol import ALL_CONDITIONS as known
     else:
-        known = paper
+        from ..tasks.maze_run import ALL_CONDITIONS as known
     if isinstance(conditions, str):
         conditions = (conditions,)
     try:

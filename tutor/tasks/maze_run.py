@@ -6,6 +6,12 @@ VR  visual feedback and the paper's three rules (:mod:`tutor.tasks.maze_rules`);
     demo's compliance with the rule in force is kept in the run record.
 
 Trainees do the three conditions in the paper's order, NF, VF, VR.
+
+Beyond the paper (not in the paper's order, never by default):
+
+VA  visual feedback, adaptive: after every demo the robot shows only the k = 5 start
+    points a selector picks (:mod:`tutor.framework.selectors`) instead of all 140, and
+    withholds the totals, as the paper's BF does on the tray.
 """
 
 from __future__ import annotations
@@ -14,9 +20,16 @@ from ..framework import TeachingRun
 from ..framework.session import FeedbackRecord
 from .maze_rules import RuleAdvice, advise, followed
 
-__all__ = ["MazeRun", "CONDITIONS", "PHASE_ORDER"]
+__all__ = ["MazeRun", "ADAPTIVE", "ALL_CONDITIONS", "CONDITIONS", "EXTRA_CONDITIONS", "PHASE_ORDER"]
 
+#: the paper's three conditions (condition -> feedback mode)
 CONDITIONS = {"NF": "none", "VF": "all", "VR": "all"}
+#: conditions beyond the paper
+EXTRA_CONDITIONS = {"VA": "adaptive"}
+#: every condition a maze run can be in
+ALL_CONDITIONS = {**CONDITIONS, **EXTRA_CONDITIONS}
+#: the adaptive conditions' selector and k
+ADAPTIVE = {"VA": ("disagreement", 5)}
 #: the paper's order of the three phases
 PHASE_ORDER = ("NF", "VF", "VR")
 
@@ -25,7 +38,8 @@ class MazeRun(TeachingRun):
     """A maze run (see the module docstring); ``MazeRun.new("VF", MazeTask())``."""
 
     experiment = 1
-    conditions = CONDITIONS
+    conditions = ALL_CONDITIONS
+    adaptive = ADAPTIVE
 
     def advice(self) -> RuleAdvice:
         """VR: the rule that applies to the next demo."""

@@ -29,9 +29,11 @@ from ..tasks.maze_run import MazeRun
 from .model import SIMULATED, TeacherModel, simulated_clock
 from .traits import TeacherTraits
 
-__all__ = ["MazeTeacher", "MAZE_CONDITIONS", "SLIP_SHIFTS"]
+__all__ = ["MazeTeacher", "MAZE_CONDITIONS", "ALL_MAZE_CONDITIONS", "SLIP_SHIFTS"]
 
 MAZE_CONDITIONS = {"NF": "none", "VF": "all", "VR": "all"}
+#: with VA (beyond the paper): only the k start points a selector picks are shown
+ALL_MAZE_CONDITIONS = {**MAZE_CONDITIONS, "VA": "adaptive"}
 #: how a slip bends the stroke: guide point index -> shift (m); each cuts an obstacle corner
 SLIP_SHIFTS = {0: (-0.05, 0.03), 2: (0.05, 0.03)}
 RATE_HZ = 80.0  #: the paper's tracker rate
@@ -68,8 +70,12 @@ class MazeTeacher:
         xy = path[:, 1:] + tremor * np.sin(np.pi * s)[:, None]
         return np.column_stack([s * duration, xy])
 
-    def teach(self, condition: str, rng) -> MazeRun:
+    def teach(self, condition: str, rng, **adaptive) -> MazeRun:
         """Teach one run under ``condition``; returns the finished run.
+
+        VA (beyond the paper) is read as VF is, on the k start points shown
+        (``adaptive``: ``selector=``, ``k=``; the random selectors draw from a generator
+        spawned from ``rng``).
 
         Its record tells the story: each demo's ``chosen_by`` (how its start was chosen:
         "plan", "red", "rule 0".."rule 3"), ``mistake`` ("slip" when the hand slipped)
@@ -77,17 +83,26 @@ class MazeTeacher:
         "patience". Maze teachers never take a demo back (the paper's maze protocol has
         no undo).
         """
-        if condition not in MAZE_CONDITIONS:
+        if condition not in ALL_MAZE_CONDITIONS:
             raise InvalidParameterError(
-                f"maze condition must be one of {', '.join(MAZE_CONDITIONS)}, got {condition!r}"
+                f"maze condition must be one of {', '.join(ALL_MAZE_CONDITIONS)}, "
+                f"got {condition!r}"
+            )
+        if adaptive and ALL_MAZE_CONDITIONS[condition] != "adaptive":
+            raise InvalidParameterError(
+                f"selector= and k= are only for the adaptive conditions, not {condition}"
             )
         task, t = self.task, self.traits
         rng = np.random.default_rng(rng)
+        if ALL_MAZE_CONDITIONS[condition] == "adaptive":
+            adaptive["rng"] = rng.spawn(1)[0]
         zone, margin = task.layout.start_zone, 0.001
         lower = np.array([zone.x0 + margin, zone.y0 + margin])
         upper = np.array([zone.x1 - margin, zone.y1 - margin])
         model = TeacherModel(t, rng, task.conditions, lower, upper, "maze")
-        run = MazeRun.new(condition, task, trainee=SIMULATED, clock=simulated_clock)
+        run = MazeRun.new(
+            condition, task, trainee=SIMULATED, clock=simulated_clock, **adaptive
+        )
         session = run.session
         first_start = None
         while True:

@@ -38,7 +38,8 @@ class MazeTutor(TutorApp):
 
     Parameters
     ----------
-    condition : {"NF", "VF", "VR"}
+    condition : {"NF", "VF", "VR", "VA"}
+        VA (beyond the paper): only the k start points a selector picks are shown.
     session_file : path, optional
         Where the run autosaves; an existing file of the same run is resumed.
     task : MazeTask, optional
@@ -189,7 +190,8 @@ class MazeTutor(TutorApp):
             + "</ul>"
         )
         if self.finished and s.n_demos:
-            summary = finish_summary(self.run, PAPER_MEDIAN_ETA[self.condition], "median")
+            paper = paper_condition(self.condition)
+            summary = finish_summary(self.run, PAPER_MEDIAN_ETA[paper], "median", paper)
             parts.append(
                 f"<div class='lfd-score'><b>Finished.</b> {html.escape(summary)}</div>"
             )
@@ -208,6 +210,12 @@ class MazeTutor(TutorApp):
             self.pad.draw(demo)
         if finish:
             self.finish()
+
+
+def paper_condition(condition: str) -> str:
+    """The paper's condition a maze run is compared with: its own, or for VA (beyond the
+    paper, adaptive feedback) VF."""
+    return condition if condition in PAPER_MEDIAN_ETA else "VF"
 
 
 def compare_runs(tutors) -> str:
@@ -232,7 +240,7 @@ def compare_runs(tutors) -> str:
         )
         rows.append(
             f"{t.condition}: eta = {score.efficiency:.1%} ({reach}); "
-            f"paper's median {PAPER_MEDIAN_ETA[t.condition]:.1%}"
+            f"paper's median {PAPER_MEDIAN_ETA[paper_condition(t.condition)]:.1%}"
         )
     text = "\n".join(rows)
     if {"NF", "VF", "VR"} <= eta.keys():

@@ -216,8 +216,8 @@ def finish_summary(run, paper: float, statistic: str, condition: str | None = No
     beyond = ""
     if condition is not None and condition != run.condition:
         beyond = (
-            f" {run.condition} is beyond the paper; {condition} shows as many robot "
-            "attempts after each demonstration, so it costs the same time."
+            f" {run.condition} is beyond the paper; it is compared with {condition}, the "
+            "paper's condition it replaces."
         )
     s = run.score(TARGET)
     if run.score_rule == "target":
