@@ -386,3 +386,11 @@ def test_the_maze_va_run_shows_k_start_points_and_is_read_as_vf():
     ]
     with pytest.raises(InvalidParameterError, match="only for the adaptive conditions"):
         MazeTeacher(traits, task).teach("VF", 0, k=3)
+
+
+def test_af_has_its_instruction_and_worked_example():
+    from tutor.views.worked_example import example_png, instruction_text
+
+    words = instruction_text(2, "AF")
+    assert "beyond the paper" in words and len(words.split()) <= 45
+    assert example_png(2, "AF")[:8] == b"\x89PNG\r\n\x1a\n"

@@ -137,7 +137,8 @@ class PickPlaceRun(TeachingRun):
     @property
     def feedback_seconds(self) -> float:
         """Seconds of the robot's attempts the condition shows after each demo (RF 25, BF
-        125, AF 25 k, NF and SF 0: SF's tests are asked for and paid for one by one)."""
+        125, AF 25 k, NF and SF 0: SF's tests are asked for and paid for one by one). The
+        oracle selector may show fewer than k (only failures): this is then the most."""
         n = len(self.task.conditions)
         adaptive = min(self.k, n) if self.feedback == "adaptive" else 0
         shown = {"replay": 1, "batch": len(self.batch()), "adaptive": adaptive}
