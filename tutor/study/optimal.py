@@ -52,7 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, TutorError
 from ..framework.metrics import run_score
 from ..tpgmm.linalg import inv_small, sym
 
@@ -663,15 +663,21 @@ def task_reference(
     cap: int = 10,
     workers=None,
     indices=None,
+    log=None,
 ) -> dict:
     """Everything the reference file says about one task (see :func:`compute_reference`).
 
-    ``indices`` restricts the bank to those conditions (a reduced bank, for tests).
+    ``indices`` restricts the bank to those conditions (a reduced bank, for tests);
+    ``log`` (e.g. ``print``) is told each phase's result and time.
     """
     pair_draws = _whole(pair_draws, "pair_draws", 1)
     bank = make_bank(task, draws, seed, indices)
     found = greedy(task, bank, cap, workers=workers)
+    if log is not None:
+        log(f"{task.name}: greedy eps {found.efficacies} in {found.seconds:.1f} s")
     pairs = pair_bound(task, bank.first_draws(min(pair_draws, draws)), workers)
+    if log is not None:
+        log(f"{task.name}: {pairs.n_pairs} pairs, best {pairs.best:.3f}, {pairs.seconds:.0f} s")
     experiment = EXPERIMENT[task.name]
     return {
         "experiment": experiment,
@@ -703,6 +709,7 @@ def compute_reference(
     cap: int = 10,
     workers=None,
     indices: dict | None = None,
+    log=None,
 ) -> dict:
     """The optimal teacher's reference for each task, as written to ``optimal.json``.
 
@@ -721,6 +728,8 @@ def compute_reference(
         Processes (default: up to 2).
     indices : dict, optional
         Task name -> the conditions of a reduced bank (tests); default all of B^.
+    log : callable, optional
+        Told each phase's result and time (the command prints them).
     """
     settings = {"draws": draws, "seed": seed, "pair_draws": pair_draws, "cap": cap}
     out = {
@@ -734,7 +743,7 @@ def compute_reference(
         task = _make_task(name)
         subset = None if indices is None else indices.get(name)
         out["tasks"][name] = task_reference(
-            task, draws, seed, pair_draws, cap, workers, indices=subset
+            task, draws, seed, pair_draws, cap, workers, indices=subset, log=log
         )
         if subset is not None:
             out["tasks"][name]["bank"]["indices"] = [int(i) for i in subset]
@@ -753,7 +762,9 @@ def main(argv=None) -> int:
         "TD_1 and the best possible eta per task, written as JSON.",
     )
     parser.add_argument("--out", required=True, help="the JSON file to write")
-    parser.add_argument("--tasks", nargs="+", default=["maze", "pickplace"])
+    parser.add_argument(
+        "--tasks", nargs="+", default=["maze", "pickplace"], choices=["maze", "pickplace"]
+    )
     parser.add_argument("--draws", type=int, default=3, help="bank demos per condition")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--pair-draws", type=int, default=1, help="draws in the pair bound")
@@ -763,10 +774,19 @@ def main(argv=None) -> int:
     from ..fileio import write_json
 
     start = time.perf_counter()
-    ref = compute_reference(
-        args.tasks, args.draws, args.seed, args.pair_draws, args.cap, args.workers
-    )
-    path = write_json(args.out, ref)
+    try:
+        ref = compute_reference(
+            args.tasks,
+            args.draws,
+            args.seed,
+            args.pair_draws,
+            args.cap,
+            args.workers,
+            log=lambda text: print(text, flush=True),
+        )
+        path = write_json(args.out, ref)
+    except TutorError as exc:
+        parser.error(str(exc))
     for name, r in ref["tasks"].items():
         td = r["td"]
         print(
