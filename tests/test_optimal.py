@@ -251,6 +251,10 @@ def test_td_values_agree_with_the_bundled_json(name):
             assert td["lower_bound"] == 3
     assert ref.best_eta == entry["td"]["0.9" if ref.experiment == 1 else "1"]["eta"][entry["rule"]]
     assert ref.experiment == (1 if name == "maze" else 2)
+    # no run of any length beats it by stopping early: one demo, the best pair, the path
+    by_length = [entry["greedy"]["best_single"], entry["pairs"]["best_efficacy"] / 2]
+    by_length += [e / m for m, e in enumerate(effs, 1)]
+    assert ref.eta_any_stop == pytest.approx(max(by_length))
 
 
 def test_a_broken_reference_file_is_named(tmp_path):
@@ -280,3 +284,42 @@ def test_a_finished_run_says_how_few_demos_this_robot_needs(maze):
     assert f"best possible η by this experiment's score is {ref.best_eta:.1%}" in summary
     assert summary.count("η =") == 1  # one score: the trainee's
     assert optimal_sentence(maze) in summary.replace(f"You used {n} demonstrations; t", "T")
+
+
+def _optimal_lines(figure) -> list[float]:
+    """Heights of the optimal teacher's lines on a figure's first (eta) axis."""
+    return [
+        ln.get_ydata()[0]
+        for ln in figure.axes[0].get_lines()
+        if ln.get_label().startswith("optimal teacher")
+    ]
+
+
+def test_the_results_and_the_cohort_figures_draw_the_optimal_line(maze):
+    import matplotlib.pyplot as plt
+
+    from tutor.study.figures import experiment1_figure, experiment2_figure
+    from tutor.study.report import load_result
+    from tutor.views.maze_app import compare_runs, plot_runs
+
+    app = MazeTutor("VF", task=maze)
+    for demo in bundled_demos("maze_good"):
+        app.add(demo)
+    assert optimal_sentence(maze) in compare_runs([app])
+    ax = plot_runs([app])
+    ref = optimal_reference("maze")
+    lines = [ln for ln in ax.get_lines() if ln.get_label().startswith("optimal teacher")]
+    assert len(lines) == 1 and lines[0].get_ydata()[0] == pytest.approx(100 * ref.best_eta)
+    plt.close(ax.figure)
+    for experiment, name, draw in (
+        (1, "maze", experiment1_figure),
+        (2, "pickplace", experiment2_figure),
+    ):
+        ref = optimal_reference(name)
+        fig = draw(load_result(experiment).runs, optimal=ref)
+
+        assert _optimal_lines(fig) == [pytest.approx(ref.best_eta)]
+        plt.close(fig)
+        plain = draw(load_result(experiment).runs)
+        assert not _optimal_lines(plain)
+        plt.close(plain)

@@ -636,7 +636,7 @@ def teaching_dimension(target: float, greedy_result: GreedyResult, pairs: PairBo
         "exact": found == lower,
     }
     if path is not None:
-        out["eta"] = {rule: round(run_score(path, rule).efficiency, 6) for rule in RULES}
+        out["eta"] = {rule: round(run_score(path, rule).efficiency, 6) for rule in RULES.values()}
     return out
 
 

@@ -50,6 +50,10 @@ class OptimalReference:
         Coverage -> eta there under this experiment's scoring rule.
     best_pair : float
         The highest eps any pair of bank demos reaches.
+    best_single : float
+        The highest eps any one bank demo reaches.
+    greedy : tuple of float
+        eps after each of the greedy teacher's demos.
     """
 
     task: str
@@ -59,6 +63,8 @@ class OptimalReference:
     efficacy: dict
     eta: dict
     best_pair: float
+    best_single: float = 0.0
+    greedy: tuple = ()
 
     @property
     def coverage(self) -> float:
@@ -80,6 +86,20 @@ class OptimalReference:
         """The best possible eta by this experiment's rule, at :attr:`coverage`."""
         return self.eta[STATED_AT[self.experiment]]
 
+    @property
+    def eta_any_stop(self) -> float:
+        """The best eta of a run of any length, stopped anywhere: the highest eps found
+        with M demos over M (one demo, the best pair, then the greedy path).
+
+        Under both scoring rules a run of M demos scores at most its best eps over M, so
+        when this equals :attr:`best_eta` no teacher beats the reference by stopping
+        early (over the bank's demos).
+        """
+        best = {1: self.best_single, 2: self.best_pair}
+        for m, eps in enumerate(self.greedy, start=1):
+            best[m] = max(best.get(m, 0.0), eps)
+        return max(eps / m for m, eps in best.items())
+
 
 def _reference(name: str, entry) -> OptimalReference:
     where = f"optimal teacher's reference for {name!r}"
@@ -97,6 +117,8 @@ def _reference(name: str, entry) -> OptimalReference:
             efficacy[key] = None if n is None else float(item["efficacy"][-1])
             eta[key] = None if n is None else float(item["eta"][RULES[experiment]])
         best_pair = entry["pairs"]["best_efficacy"]
+        best_single = float(entry["greedy"]["best_single"])
+        path = tuple(float(e) for e in entry["greedy"]["efficacy"])
     except (KeyError, TypeError, IndexError, ValueError) as exc:
         raise InvalidFileError(
             f"the {where} is incomplete ({exc!r}); regenerate the file with "
@@ -104,7 +126,9 @@ def _reference(name: str, entry) -> OptimalReference:
         ) from exc
     if experiment not in RULES or not finite_number(best_pair):
         raise InvalidFileError(f"the {where} has an unknown experiment or a bad pair bound")
-    return OptimalReference(name, experiment, fewest, proven, efficacy, eta, float(best_pair))
+    return OptimalReference(
+        name, experiment, fewest, proven, efficacy, eta, float(best_pair), best_single, path
+    )
 
 
 def load_references(path=None) -> dict[str, OptimalReference]:
