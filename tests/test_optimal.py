@@ -317,7 +317,6 @@ def test_the_results_and_the_cohort_figures_draw_the_optimal_line(maze):
     ):
         ref = optimal_reference(name)
         fig = draw(load_result(experiment).runs, optimal=ref)
-
         assert _optimal_lines(fig) == [pytest.approx(ref.best_eta)]
         plt.close(fig)
         plain = draw(load_result(experiment).runs)
