@@ -322,3 +322,23 @@ def test_the_results_and_the_cohort_figures_draw_the_optimal_line(maze):
         plain = draw(load_result(experiment).runs)
         assert not _optimal_lines(plain)
         plt.close(plain)
+
+
+def test_the_lookahead_below_the_views_hints_from_a_run(tray):
+    """The next-demo hint's call: a run, a bank of the task's own scripted demos."""
+    from tutor.tasks import lookahead
+    from tutor.tasks.pickplace_protocol import PickPlaceRun
+
+    run = PickPlaceRun.new("BF", tray)
+    run.demonstrate(0, rng=np.random.default_rng(1))
+    bank = lookahead.make_bank(tray, 1, indices=[0, 4, 76, 99])
+    for demo, cond in zip(bank.demos, bank.conditions, strict=True):
+        assert tray.judge_demo(demo, cond).passed[0]
+    hint = lookahead.best_next(tray, run, bank, workers=1)
+    state = lookahead.State.from_session(run)
+    assert len(state.demos) == 1
+    scores = [
+        lookahead.efficacy_after(tray, state, d, c)[0]
+        for d, c in zip(bank.demos, bank.conditions, strict=True)
+    ]
+    assert hint.efficacy == max(scores) and hint.index == int(bank.index[np.argmax(scores)])
