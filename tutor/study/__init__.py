@@ -5,6 +5,8 @@
 - :mod:`.figures`: the paper-style figures (they take the result frames only).
 - :mod:`.report`: text tables beside the paper's numbers, files, robustness over seeds.
 - :mod:`.paper`: the numbers the paper reports.
+- :mod:`.optimal`: the optimal (greedy machine) teacher, its pair bound and the teaching
+  dimension (``python -m tutor.study.optimal --out tutor/assets/optimal.json``).
 
 Command line: ``python -m tutor reproduce --experiment 1|2 --seed S --out DIR``.
 """

@@ -1,7 +1,9 @@
 """Figures of the simulated cohorts, laid out like the paper's (matplotlib).
 
 Each function takes the ``runs`` frame of a :class:`~tutor.study.cohort.CohortResult`
-(nothing else), draws the simulation and marks the paper's numbers beside it.
+(nothing else), draws the simulation and marks the paper's numbers beside it, and, when
+given the optimal teacher's reference (:func:`tutor.tasks.optimal_reference.optimal_reference`),
+the best possible η and the fewest demonstrations as dashed lines.
 """
 
 from __future__ import annotations
@@ -12,7 +14,13 @@ import pandas as pd
 
 from . import paper
 
-__all__ = ["experiment1_figure", "experiment2_figure", "PAPER_MARK", "REFERENCE_MARK"]
+__all__ = [
+    "experiment1_figure",
+    "experiment2_figure",
+    "PAPER_MARK",
+    "REFERENCE_MARK",
+    "OPTIMAL_LINE",
+]
 
 PAPER_MARK = {"marker": "D", "color": "#d62728", "s": 40, "zorder": 5}
 BOX = {"patch_artist": True, "widths": 0.55, "medianprops": {"color": "#d62728", "lw": 2}}
@@ -37,15 +45,45 @@ def _boxes(ax, runs, column, conds, colour="#9ecae1"):
 
 #: how a reference cohort's numbers are marked (e.g. a simulated class of the same size)
 REFERENCE_MARK = {"marker": "^", "color": "#636363", "s": 40, "zorder": 5}
+#: how the optimal teacher's numbers are drawn (a line across the conditions)
+OPTIMAL_LINE = {"color": "#2ca02c", "linestyle": "--", "linewidth": 1.5, "zorder": 4}
+
+
+def _optimal_eta(ax, optimal, scale: float = 1.0) -> None:
+    """The optimal teacher's eta as a dashed line on an eta axis (nothing without one)."""
+    if optimal is None or optimal.best_eta is None:
+        return
+    ax.axhline(
+        scale * optimal.best_eta,
+        label=f"optimal teacher: η = {optimal.best_eta:.0%} ({optimal.n_demos} demos)",
+        **OPTIMAL_LINE,
+    )
+
+
+def _optimal_demos(ax, optimal) -> None:
+    """The fewest demos the robot needs, as a dashed line on a demos axis."""
+    if optimal is None or optimal.n_demos is None:
+        return
+    ax.axhline(
+        optimal.n_demos,
+        label=f"fewest needed for {optimal.coverage:.0%}: {optimal.n_demos}",
+        **OPTIMAL_LINE,
+    )
+    ax.legend(loc="upper right", fontsize=8)
 
 
 def experiment1_figure(
-    runs: pd.DataFrame, who: str = "simulated teachers", reference: pd.DataFrame | None = None
+    runs: pd.DataFrame,
+    who: str = "simulated teachers",
+    reference: pd.DataFrame | None = None,
+    optimal=None,
 ):
     """Experiment 1: eta per condition (box plots, paper's medians marked), demos, efficacy.
 
     ``who`` names the teachers in the title; ``reference`` (another ``runs`` frame, e.g. a
-    simulated cohort of the class's size) has its medians marked beside the paper's.
+    simulated cohort of the class's size) has its medians marked beside the paper's;
+    ``optimal`` (an :class:`~tutor.tasks.optimal_reference.OptimalReference`) draws the
+    best possible η and the fewest demos needed as dashed lines.
 
     Returns
     -------
@@ -67,10 +105,12 @@ def experiment1_figure(
             label=f"simulated median ({reference.teacher.nunique()} teachers)",
             **REFERENCE_MARK,
         )
+    _optimal_eta(ax, optimal)
     ax.set_ylabel("teaching efficiency η (at 90 % coverage)")
     ax.set_title(f"η per condition ({runs.teacher.nunique()} {who})")
     ax.legend(loc="upper left", fontsize=8)
     _boxes(axes[1], runs, "n_demos", conds, "#c7e9c0")
+    _optimal_demos(axes[1], optimal)
     axes[1].set_ylabel("demonstrations given")
     axes[1].set_title("(a) demonstrations per condition")
     _boxes(axes[2], runs, "efficacy", conds, "#fdd0a2")
@@ -81,12 +121,15 @@ def experiment1_figure(
 
 
 def experiment2_figure(
-    runs: pd.DataFrame, who: str = "simulated teachers", reference: pd.DataFrame | None = None
+    runs: pd.DataFrame,
+    who: str = "simulated teachers",
+    reference: pd.DataFrame | None = None,
+    optimal=None,
 ):
     """Experiment 2: mean eta per run and overall per condition, the paper's beside it.
 
-    ``who`` and ``reference`` as in :func:`experiment1_figure` (the reference's mean η is
-    marked).
+    ``who``, ``reference`` and ``optimal`` as in :func:`experiment1_figure` (the
+    reference's mean η is marked; the optimal teacher's η is a dashed line).
 
     Returns
     -------
@@ -129,6 +172,7 @@ def experiment2_figure(
             label=f"simulated: mean ({reference.teacher.nunique()} teachers)",
             **REFERENCE_MARK,
         )
+    _optimal_eta(ax, optimal)
     ax.set_xticks(x, conds)
     ax.set_ylabel("mean teaching efficiency η")
     ax.set_title(f"η̄ per run and overall ({runs.teacher.nunique()} {who})")

@@ -26,9 +26,10 @@ from ..paper import PAPER_MEDIAN_ETA
 from ..runtime import headless
 from ..tasks.maze import MazeTask
 from ..tasks.maze_run import CONDITIONS, MazeRun
+from ..tasks.optimal_reference import optimal_reference
 from .app import TutorApp, guarded
 from .sketchpad import Sketchpad, layout_spec
-from .text import compose, finish_summary
+from .text import compose, finish_summary, optimal_sentence
 
 __all__ = ["MazeTutor", "CONDITIONS", "PAPER_MEDIAN_ETA", "compare_runs", "plot_runs"]
 
@@ -243,6 +244,8 @@ def compare_runs(tutors) -> str:
             f"paper's median {PAPER_MEDIAN_ETA[paper_condition(t.condition)]:.1%}"
         )
     text = "\n".join(rows)
+    if eta:
+        text += "\n" + optimal_sentence(tutors[0].task)
     if {"NF", "VF", "VR"} <= eta.keys():
         feedback_best = max(eta["VF"], eta["VR"])
         if eta["NF"] < feedback_best:
@@ -265,7 +268,8 @@ def compare_runs(tutors) -> str:
 
 
 def plot_runs(tutors, ax=None):
-    """Bar chart of the trainee's eta per condition with the paper's medians marked."""
+    """Bar chart of the trainee's eta per condition with the paper's medians marked, and
+    the optimal teacher's eta (the best possible) as a dashed line."""
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -284,6 +288,15 @@ def plot_runs(tutors, ax=None):
         label="paper's median",
         zorder=3,
     )
+    best = optimal_reference("maze")
+    if best is not None and best.best_eta is not None:
+        ax.axhline(
+            100 * best.best_eta,
+            color="#2ca02c",
+            linestyle="--",
+            label=f"optimal teacher ({best.n_demos} demos)",
+            zorder=2,
+        )
     ax.set_xticks(x, names)
     ax.set_ylabel("teaching efficiency η (%)")
     ax.legend(frameon=False)

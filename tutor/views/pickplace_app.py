@@ -27,7 +27,7 @@ from ..tasks.pickplace import PickPlaceTask
 from ..tasks.pickplace_protocol import PickPlaceRun
 from .app import TutorApp, guarded
 from .style import DEMO, FAIL, PASS, UNKNOWN
-from .text import compose, finish_summary, plain_reason
+from .text import compose, finish_summary, optimal_sentence, plain_reason
 
 __all__ = ["PickPlaceTutor", "tray_status", "compare_runs", "PAPER_MEAN_ETA", "PAPER_THIRD_RUN_ETA"]
 
@@ -444,6 +444,9 @@ def compare_runs(tutors) -> str:
         f"\nYour mean eta: {np.mean(etas):.1%}. The paper's 9 trainees in {cond}{beyond}: mean "
         f"{PAPER_MEAN_ETA[cond]:.1%} over the runs, {PAPER_THIRD_RUN_ETA[cond]:.1%} in the third."
     )
+    best = optimal_sentence(tutors[0].task)
+    if best:
+        lines.append(best)
     lines.append(
         "The paper found batch feedback (BF: the five sample plants after every demo) best, "
         "about 1.7 times the others, because it shows how the robot generalises; replays (RF) "

@@ -25,8 +25,16 @@ import re
 import numpy as np
 
 from ..framework import AMBIGUOUS, INCORRECT, UNDEMONSTRATED
+from ..tasks.optimal_reference import optimal_reference
 
-__all__ = ["compose", "finish_summary", "summary", "session_report", "plain_reason"]
+__all__ = [
+    "compose",
+    "finish_summary",
+    "optimal_sentence",
+    "summary",
+    "session_report",
+    "plain_reason",
+]
 
 #: the paper's coverage target (Experiment 1's 90 %)
 TARGET = 0.9
@@ -233,10 +241,41 @@ def finish_summary(run, paper: float, statistic: str, condition: str | None = No
             f"after {_plural(s.n_demos, 'demonstration', 'demonstrations')} the robot "
             f"succeeds at {s.efficacy:.0%} of the {run.task.condition_noun_plural}"
         )
-    return (
+    text = (
         f"{how[0].upper()}{how[1:]}: your teaching efficiency is η = {s.efficiency:.1%} "
         f"(efficacy divided by the number of demonstrations). The paper's {statistic} for "
         f"{condition or run.condition} was {paper:.1%}.{beyond}"
+    )
+    best = optimal_sentence(run.task, s.n_demos)
+    return f"{text} {best}" if best else text
+
+
+def optimal_sentence(task, n_demos: int | None = None) -> str:
+    """The optimal teacher beside the trainee: "You used 6 demonstrations; the fewest this
+    robot needs to reach 90% is 3, so the best possible η by this experiment's score is
+    33.3%." ("" when the tutor has no reference for the task).
+
+    Parameters
+    ----------
+    task : Task
+    n_demos : int, optional
+        The demonstrations the trainee's score counts (left out when None).
+    """
+    ref = optimal_reference(task.name)
+    if ref is None or ref.n_demos is None:
+        return ""
+    goal = (
+        f"to reach {ref.coverage:.0%}"
+        if ref.coverage < 1
+        else f"to succeed at every one of the {len(task.conditions)} {task.condition_noun_plural}"
+    )
+    fewest = "the fewest this robot needs" if ref.is_proven else "the fewest found"
+    head = f"{fewest} {goal} is {ref.n_demos}"
+    if n_demos is not None:
+        head = f"you used {_plural(n_demos, 'demonstration', 'demonstrations')}; {head}"
+    return (
+        f"{head[0].upper()}{head[1:]}, so the best possible η by this experiment's score is "
+        f"{ref.best_eta:.1%}."
     )
 
 

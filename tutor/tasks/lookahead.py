@@ -1,0 +1,442 @@
+r"""One step of greedy lookahead: which demo would raise efficacy the most?
+
+Given the current demonstrations and learner (a :class:`State`, e.g. of a trainee's
+session) and a **bank** of candidate demos, :func:`best_next` returns the candidate that
+maximises efficacy eps once added, computed exactly as
+:meth:`tutor.framework.TeachingSession.add_demo` would (the same learner refitted on a
+copy, warm-started when the task's learner warm-starts, the same criteria). Ties go to
+the first candidate, so the answer is deterministic. It is the step of the optimal
+teacher (:mod:`tutor.study.optimal`) and of a next-demo hint.
+
+Two exact shortcuts make a candidate cost one refit (about 10-20 ms) and little else:
+
+- :func:`realise`: R^ as an affine map of the frames' origins when every frame's rotation
+  is the same for all conditions (both tasks: every frame is axis aligned), equal to
+  ``learner.reproduce_batch`` to rounding;
+- :func:`judged`: the pick-and-place criterion (i) follows the arm only for realisations
+  that meet criteria (ii) and (iii); a realisation is in B iff it meets them all.
+
+:class:`Scorer` spreads the candidates over worker processes (both cores by default)
+and stops at the first candidate reaching eps = 1.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+from ..tpgmm.linalg import inv_small, sym
+
+__all__ = [
+    "Bank",
+    "State",
+    "NextDemo",
+    "Scorer",
+    "make_bank",
+    "scripted_recording",
+    "realise",
+    "judged",
+    "efficacy_after",
+    "best_next",
+    "shared",
+    "EPS_TOL",
+]
+
+#: how many tries a careful hand gets to make a correct bank demo for one condition
+MAX_TRIES = 5
+#: exact efficacies compare equal within this (eps is a share of at most a few hundred)
+EPS_TOL = 1e-12
+#: the jitter (m) of a scripted maze demo's guide points (the steadiest simulated hand)
+SCRIPTED_JITTER = 0.002
+
+
+# ---------------------------------------------------------------- the bank
+
+
+@dataclass(frozen=True)
+class Bank:
+    """Candidate demonstrations: several careful draws for each condition of B^.
+
+    Attributes
+    ----------
+    demos : ndarray (n, T, 1 + d)
+        Preprocessed demos (``task.preprocess``), in bank order.
+    conditions : ndarray (n, c)
+        The condition each demo was given under (a row of ``task.conditions``).
+    index : ndarray of int (n,)
+        Its index in B^.
+    draw : ndarray of int (n,)
+        Which draw of the hand it is (0, 1, ...).
+    """
+
+    demos: np.ndarray
+    conditions: np.ndarray
+    index: np.ndarray
+    draw: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.index)
+
+    def subset(self, keep) -> Bank:
+        """The bank demos at positions ``keep`` (in that order)."""
+        keep = np.asarray(keep, dtype=int)
+        return Bank(self.demos[keep], self.conditions[keep], self.index[keep], self.draw[keep])
+
+    def first_draws(self, n_draws: int = 1) -> Bank:
+        """The demos of the first ``n_draws`` draws only (the pair bound's bank)."""
+        return self.subset(np.flatnonzero(self.draw < n_draws))
+
+
+def scripted_recording(task, index: int, rng) -> np.ndarray:
+    """A careful scripted recording for condition ``index``, made by the task itself.
+
+    Maze: :meth:`~tutor.tasks.maze.MazeLayout.reference_path` from the start point with
+    2 mm of hand jitter on its guide points. Pick-and-place:
+    :meth:`~tutor.tasks.pickplace.PickPlaceTask.demonstrate` with no mistake.
+    """
+    if task.name == "maze":
+        return task.layout.reference_path(task.conditions[index], rng, jitter=SCRIPTED_JITTER)
+    if task.name == "pickplace":
+        return task.demonstrate(int(index), rng)
+    raise InvalidParameterError(
+        f"scripted demos exist for the tasks 'maze' and 'pickplace', got {task.name!r}"
+    )
+
+
+def make_bank(task, draws: int = 3, seed: int = 0, indices=None, recording=None) -> Bank:
+    """The bank: ``draws`` careful demos for each condition (all of B^ by default).
+
+    Each demo is drawn with its own generator, seeded by (seed, index, draw, try), so a
+    bank of fewer conditions or draws holds the same demos as the full one. A draw that
+    is not a correct demo (``task.judge_demo``) is drawn again (at most ``MAX_TRIES``).
+    ``recording(task, index, rng)`` makes one raw recording (default
+    :func:`scripted_recording`).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``draws`` or ``seed`` is not a whole number (>= 1, >= 0), an index is outside
+        B^, or a careful teacher could not make a correct demo for a condition.
+    """
+    draws, seed = _whole(draws, "draws", 1), _whole(seed, "seed", 0)
+    recording = scripted_recording if recording is None else recording
+    n = len(task.conditions)
+    idx = np.arange(n) if indices is None else np.asarray(indices, dtype=int).ravel()
+    if idx.size == 0 or np.any((idx < 0) | (idx >= n)):
+        raise InvalidParameterError(f"bank indices must be in 0..{n - 1}, got {idx.tolist()}")
+    demos, conds, index, draw = [], [], [], []
+    for k in range(draws):
+        for i in idx:
+            demo = _correct_demo(task, recording, int(i), seed, k)
+            demos.append(demo)
+            conds.append(task.conditions[i])
+            index.append(int(i))
+            draw.append(k)
+    return Bank(np.array(demos), np.array(conds, dtype=float), np.array(index), np.array(draw))
+
+
+def _correct_demo(task, recording, i: int, seed: int, k: int) -> np.ndarray:
+    for attempt in range(MAX_TRIES):
+        rng = np.random.default_rng(np.random.SeedSequence([seed, i, k, attempt]))
+        demo = task.preprocess(recording(task, i, rng))
+        if task.judge_demo(demo, task.conditions[i]).passed[0]:
+            return demo
+    raise InvalidParameterError(
+        f"a careful teacher made no correct demo for {task.condition_noun} {i} in "
+        f"{MAX_TRIES} tries: check the task's geometry and criteria"
+    )
+
+
+def _whole(value, name: str, lowest: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < lowest:
+        raise InvalidParameterError(f"{name} must be a whole number >= {lowest}, got {value!r}")
+    return int(value)
+
+
+# ---------------------------------------------------------------- efficacy, fast
+
+
+def realise(task, learner) -> np.ndarray:
+    """R^: the learner's mean realisation from every condition of B^, (n, T, d).
+
+    The same as ``learner.reproduce_batch(task.frame_batch(task.conditions), task.times)``
+    (the session's), computed as an affine map of the frame origins when every frame's
+    rotation is the same for all conditions: the product's precision is then one per
+    time step, shared by every condition.
+    """
+    batch = task.frame_batch(task.conditions)
+    W = batch.A_inv  # (B, P, d, d)
+    if not np.array_equal(W, np.broadcast_to(W[:1], W.shape)):
+        return learner.reproduce_batch(batch, task.times)[0]
+    W = W[0][:, None]  # (P, 1, d, d): one per frame, shared by every time step
+    Wt = np.swapaxes(W, -1, -2)
+    mean, cov = learner.regress_local(task.times)  # (P, T, d), (P, T, d, d)
+    L = sym(inv_small(cov))
+    world = Wt @ L @ W  # each frame's precision in the world, (P, T, d, d)
+    prec_cov = sym(inv_small(world.sum(axis=0)))  # the product's covariance, (T, d, d)
+    base = (prec_cov @ (Wt @ (L @ mean[..., None])).sum(axis=0))[..., 0]  # (T, d)
+    gain = prec_cov @ world  # how each frame's origin moves the mean, (P, T, d, d)
+    P, T, d, _ = gain.shape
+    B = batch.b.shape[0]
+    shift = gain.transpose(1, 2, 0, 3).reshape(T * d, P * d) @ batch.b.reshape(B, P * d).T
+    return base[None] + shift.reshape(T, d, B).transpose(2, 0, 1)
+
+
+@dataclass
+class State:
+    """What the session knows before the next demo: its demos, conditions and learner.
+
+    ``learner`` is the one fitted on ``demos`` (a fresh one before any demo); adding a
+    demo fits a copy of it, as :meth:`TeachingSession.add_demo` does.
+    """
+
+    demos: list
+    conditions: list
+    learner: object
+
+    @classmethod
+    def empty(cls, task) -> State:
+        return cls([], [], task.make_learner())
+
+    @classmethod
+    def from_session(cls, session) -> State:
+        """The state of a :class:`~tutor.framework.TeachingSession` (or a run's session)."""
+        session = getattr(session, "session", session)
+        return cls(session.demos, session.conditions, session.learner)
+
+    def added(self, task, demo, condition) -> tuple[State, float, np.ndarray]:
+        """The state after ``demo``, its eps and the passed mask (n,)."""
+        eps, passed, learner = efficacy_after(task, self, demo, condition)
+        return State([*self.demos, demo], [*self.conditions, condition], learner), eps, passed
+
+
+def efficacy_after(task, state: State, demo, condition):
+    """eps after adding ``demo`` (preprocessed) under ``condition`` to ``state``.
+
+    Exactly the session's eps (:meth:`TeachingSession.add_demo`): a copy of the learner
+    refitted on every demo, R^ judged by the task's criteria with the demos' context.
+
+    Returns
+    -------
+    eps : float
+    passed : ndarray of bool (n,)
+    learner : the fitted copy
+    """
+    demos = [*state.demos, demo]
+    conds = np.array([*state.conditions, condition], dtype=float)
+    learner = copy.deepcopy(state.learner)
+    learner.fit(demos, [task.frames(c) for c in conds])
+    context = task.criteria_context(demos, conds)
+    passed = judged(task, realise(task, learner), context)
+    return float(passed.mean()), passed, learner
+
+
+def judged(task, trajectories, context) -> np.ndarray:
+    """``task.judge(trajectories, task.conditions, context).passed``, sooner.
+
+    A task whose criterion (i) follows the arm (``task.feasibility``, pick-and-place) is
+    judged first without it, then with it only where every other criterion holds: a
+    realisation is in B iff it meets them all, so the mask is the same, but the arm's
+    inverse kinematics run only for the realisations they can decide.
+    """
+    conditions = task.conditions
+    if getattr(task, "feasibility", None) is None:
+        return task.judge(trajectories, conditions, context).passed
+    lenient = copy.copy(task)  # shallow: the same scene, without criterion (i)'s arm
+    lenient.feasibility = None
+    passed = np.array(lenient.judge(trajectories, conditions, context).passed, dtype=bool)
+    if passed.any():
+        rows = np.flatnonzero(passed)
+        passed[rows] = task.judge(trajectories[rows], conditions[rows], context).passed
+    return passed
+
+
+# ---------------------------------------------------------------- scoring on both cores
+
+#: what the worker processes score against (set before they fork, inherited by them)
+_SHARED: dict = {}
+
+
+def _score_positions(state: State, positions) -> list[float]:
+    """eps after each bank demo at ``positions`` (a worker's share)."""
+    task, bank = _SHARED["task"], _SHARED["bank"]
+    return [efficacy_after(task, state, bank.demos[i], bank.conditions[i])[0] for i in positions]
+
+
+def shared():
+    """The task and bank the open :class:`Scorer` scores against (in a worker too)."""
+    return _SHARED["task"], _SHARED["bank"]
+
+
+def _one_blas_thread() -> None:
+    """One BLAS thread in this process: the same arithmetic here and in every worker."""
+    global _LIMITER
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - numpy then uses its default threads
+        return
+    _LIMITER = threadpool_limits(1)
+
+
+_LIMITER = None
+
+
+class Scorer:
+    """Scores bank demos for one task, on ``workers`` processes (or here, for one).
+
+    Use it as a context manager; :func:`best_next` (and the optimal teacher's
+    :func:`tutor.study.optimal.greedy` and ``pair_bound``) make their own when none is
+    given. The workers fork from this
+    process (they inherit the task and the bank); where the platform cannot fork, the
+    scoring runs here.
+    """
+
+    def __init__(self, task, bank: Bank, workers: int | None = None):
+        import multiprocessing as mp
+
+        if workers is None:
+            workers = min(os.cpu_count() or 1, 2)
+        self.workers = _whole(workers, "workers", 1)
+        if "fork" not in mp.get_all_start_methods():
+            self.workers = 1
+        self.task, self.bank, self._pool = task, bank, None
+
+    def __enter__(self) -> Scorer:
+        _one_blas_thread()
+        _SHARED.update(task=self.task, bank=self.bank)
+        if self.workers > 1:
+            import multiprocessing as mp
+            from concurrent.futures import ProcessPoolExecutor
+
+            self._pool = ProcessPoolExecutor(
+                self.workers, mp_context=mp.get_context("fork"), initializer=_one_blas_thread
+            )
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(cancel_futures=True)
+            self._pool = None
+
+    def scores(self, state: State, positions, stop_at: float | None = None) -> np.ndarray:
+        """eps after each bank demo at ``positions`` (nan for those left unscored).
+
+        With ``stop_at``, scoring stops once a demo reaches it (those after it in
+        ``positions`` are left unscored): the first to reach the highest possible eps
+        is the greedy choice anyway.
+        """
+        positions = np.asarray(positions, dtype=int)
+        out = np.full(len(positions), np.nan)
+        chunk = max(1, min(12, len(positions) // (4 * self.workers) or 1))
+        parts = [positions[k : k + chunk] for k in range(0, len(positions), chunk)]
+        if self._pool is None:
+            futures = None
+        else:
+            futures = [self._pool.submit(_score_positions, state, p) for p in parts]
+        done = 0
+        for k, part in enumerate(parts):
+            got = _score_positions(state, part) if futures is None else futures[k].result()
+            out[done : done + len(part)] = got
+            done += len(part)
+            if stop_at is not None and max(got) >= stop_at - EPS_TOL:
+                break
+        if futures is not None:
+            for fut in futures[k + 1 :]:
+                fut.cancel()
+        return out
+
+    def map(self, fn, items) -> list:
+        """``fn(item)`` for each item, in order, on the workers; ``fn`` is a module-level
+        function reading the task and bank with :func:`shared`."""
+        items = list(items)
+        if self._pool is None:
+            return [fn(item) for item in items]
+        return list(self._pool.map(fn, items))
+
+
+# ---------------------------------------------------------------- the greedy step (HF)
+
+
+@dataclass(frozen=True)
+class NextDemo:
+    """The greedy choice of the next demo.
+
+    Attributes
+    ----------
+    position : int
+        Its position in the bank (``bank.demos[position]``).
+    index : int
+        Its condition's index in B^ (the start point or plant to demonstrate).
+    draw : int
+        Which of the bank's draws for that condition it is.
+    efficacy : float
+        eps after adding it (the session's eps).
+    scores : ndarray (k,)
+        eps after each candidate scored, in candidate order (nan: not scored, as a
+        candidate before it already reached eps = 1).
+    candidates : ndarray of int (k,)
+        The bank positions considered.
+    """
+
+    position: int
+    index: int
+    draw: int
+    efficacy: float
+    scores: np.ndarray
+    candidates: np.ndarray
+
+
+def best_next(
+    task, state, bank: Bank, candidates=None, scorer: Scorer | None = None, workers=None
+) -> NextDemo:
+    """The bank demo that maximises eps once added to ``state`` (the greedy step).
+
+    Parameters
+    ----------
+    task : Task
+        The session's task (the bank's demos were made for it).
+    state : State, TeachingSession or run
+        The current demos and learner (:meth:`State.from_session` for a session or a run).
+    bank : Bank
+        The candidates (e.g. :func:`make_bank`, or one draw per condition for speed).
+    candidates : sequence of int, optional
+        Bank positions to consider (default: all), e.g. the failing conditions only.
+    scorer : Scorer, optional
+        An open :class:`Scorer` for this task and bank (its worker processes are reused).
+    workers : int, optional
+        Processes when no scorer is given (default: up to 2).
+
+    Returns
+    -------
+    NextDemo
+        Ties go to the first candidate in order (the lowest bank position by default).
+
+    Notes
+    -----
+    Each candidate costs one refit and one judgement of B^: about 15-20 ms on one core
+    for both tasks, so one draw per plant (100 candidates) takes about 1 s on two cores.
+    """
+    if not isinstance(state, State):
+        state = State.from_session(state)
+    positions = np.arange(len(bank)) if candidates is None else np.asarray(candidates, int)
+    if (
+        positions.ndim != 1
+        or positions.size == 0
+        or np.any((positions < 0) | (positions >= len(bank)))
+    ):
+        raise InvalidParameterError(
+            f"candidates must be bank positions in 0..{len(bank) - 1}, got {positions.tolist()}"
+        )
+    if scorer is None:
+        with Scorer(task, bank, workers) as own:
+            scores = own.scores(state, positions, stop_at=1.0)
+    else:
+        scores = scorer.scores(state, positions, stop_at=1.0)
+    best = int(np.nanargmax(np.where(np.isnan(scores), -np.inf, scores)))
+    p = int(positions[best])
+    index, draw = int(bank.index[p]), int(bank.draw[p])
+    return NextDemo(p, index, draw, float(scores[best]), scores, positions)
