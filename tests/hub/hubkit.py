@@ -211,6 +211,7 @@ class Hub:
 
     def __init__(self, root: Path, idle_timeout: int = 3600):
         self.root = Path(root)
+        self.root.mkdir(parents=True, exist_ok=True)
         self.class_dir = self.root / "class"
         self.homes = self.root / "homes"
         self.port = free_port()
@@ -220,6 +221,7 @@ class Hub:
         self.proc: subprocess.Popen | None = None
         self.seen: set[int] = set()  # every pid of the hub's tree seen, for the cleanup
         self.log_path = self.root / "jupyterhub.log"
+        self.log = None
 
     # ---------------------------------------------------------------- start, stop
 
@@ -300,6 +302,8 @@ class Hub:
     def stop(self) -> None:
         """Stop the hub (which stops the servers), then end whatever of its tree is left."""
         if self.proc is None:
+            if self.log is not None:
+                self.log.close()
             return
         self.remember()
         if self.proc.poll() is None:
@@ -480,7 +484,13 @@ class KernelTrainee:
         kernel = session["kernel"]["id"]
         url = f"ws://127.0.0.1:{self.hub.port}/user/{self.user}/api/kernels/{kernel}/channels"
         self.ws = await websocket_connect(
-            HTTPRequest(url, headers={"Authorization": f"token {self.hub.token}"}),
+            # the upgrade waits for the kernel to start: slow when a room starts at once
+            HTTPRequest(
+                url,
+                headers={"Authorization": f"token {self.hub.token}"},
+                connect_timeout=300,
+                request_timeout=300,
+            ),
             max_message_size=256 * 1024 * 1024,
         )
 
