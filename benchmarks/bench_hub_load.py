@@ -104,6 +104,7 @@ async def window(hub, trainees, interval: float, duration: float, seed: int) -> 
     samples: list = []
     stop = asyncio.Event()
     sampler = asyncio.create_task(sample(hub, stop, 5.0, samples))
+    load_before = os.getloadavg()[0]
     busy0, total0 = cpu_busy_jiffies()
     cpu0 = cpu_seconds(hub.remember())
     t0 = time.monotonic()
@@ -120,6 +121,7 @@ async def window(hub, trainees, interval: float, duration: float, seed: int) -> 
         "cpu_busy_share_all_cores": (busy1 - busy0) / max(1, total1 - total0),
         "hub_tree_cpu_s": cpu1 - cpu0,
         "pss_samples_mb": [round(s["pss_mb"], 1) for s in samples],
+        "load_average": [load_before, os.getloadavg()[0]],
     }
 
 
@@ -151,6 +153,10 @@ def summarise(trainees, load: dict, memory: dict, setup: dict, args, mem_drop: f
             "hub_tree_cpu_s": load["hub_tree_cpu_s"],
             "hub_tree_cores_used": load["hub_tree_cpu_s"] / load["elapsed_s"],
             "hub_tree_cpu_s_per_demo": load["hub_tree_cpu_s"] / max(1, len(every)),
+            # a shared machine: what everything outside the hub used meanwhile
+            "other_cores_used": load["cpu_busy_share_all_cores"] * cores
+            - load["hub_tree_cpu_s"] / load["elapsed_s"],
+            "load_average_before_after": load["load_average"],
         },
         "memory_mb": {
             "per_user_pss_median": percentile(per_user, 50),
@@ -208,7 +214,8 @@ def main(argv=None) -> dict:
         f"{args.duration:.0f} s ({result['n_demos']} demos, {result['cores']} cores)\n"
         f"latency: p50 {lat['p50']:.0f} ms, p95 {lat['p95']:.0f} ms, max {lat['max']:.0f} ms\n"
         f"CPU: machine {100 * cpu['busy_share_all_cores']:.0f}% busy; hub tree "
-        f"{cpu['hub_tree_cores_used']:.2f} cores ({cpu['hub_tree_cpu_s_per_demo']:.2f} s/demo)\n"
+        f"{cpu['hub_tree_cores_used']:.2f} cores ({cpu['hub_tree_cpu_s_per_demo']:.2f} s/demo), "
+        f"other processes {cpu['other_cores_used']:.2f} cores\n"
         f"memory (PSS): {mem['per_user_pss_median']:.0f} MB per trainee (median, max "
         f"{mem['per_user_pss_max']:.0f}), hub+proxy+culler {mem['hub_proxy_culler_pss']:.0f} MB, "
         f"total {mem['total_pss']:.0f} MB; MemAvailable dropped "
