@@ -148,12 +148,12 @@ def trainee_folder(spawner) -> Path:
     return CLASS_DIR / spawner.user.name
 
 
-def class_plan(spawner) -> str:
-    """``TUTOR_CLASS_PLAN``: the class plan file in the class folder, or "" if none."""
+def class_plan() -> Path | None:
+    """The class plan file in the class folder (``TUTOR_CLASS_PLAN``), or None."""
     for name in PLAN_FILES:
         if (CLASS_DIR / name).is_file():
-            return str(CLASS_DIR / name)
-    return ""
+            return CLASS_DIR / name
+    return None
 
 
 def user_home(spawner) -> Path:
@@ -186,7 +186,7 @@ def own(path: Path, spawner) -> None:
 
 
 def pre_spawn_hook(spawner) -> None:
-    """Before a server starts: its account, its class folder and its notebooks."""
+    """Before a server starts: its account, class folder, notebooks and class plan."""
     if switches_users():
         ensure_account(spawner.user.name)
     CLASS_DIR.mkdir(parents=True, exist_ok=True)
@@ -201,13 +201,15 @@ def pre_spawn_hook(spawner) -> None:
         shutil.copytree(NOTEBOOKS, notebooks, ignore=shutil.ignore_patterns("sessions"))
         own(notebooks, spawner)
     spawner.notebook_dir = str(notebooks)
+    plan = class_plan()
+    if plan is not None:  # read when the server starts: a plan written later counts
+        spawner.environment = {**spawner.environment, "TUTOR_CLASS_PLAN": str(plan)}
 
 
 c.Spawner.pre_spawn_hook = pre_spawn_hook
 # callables: '{username}' is NOT expanded inside Spawner.environment values
 c.Spawner.environment = {
     "TUTOR_SESSION_DIR": lambda spawner: str(trainee_folder(spawner)),
-    "TUTOR_CLASS_PLAN": class_plan,
 }
 
 # ---------------------------------------------------------------- the idle culler

@@ -62,6 +62,7 @@ from tests.hub.hubkit import (
     Hub,
     HubError,
     KernelTrainee,
+    environ_of,
     percentile,
 )
 
@@ -247,6 +248,20 @@ def assert_loopback_only(hub: Hub, when: str) -> int:
     return len(found)
 
 
+def check_server_environment(hub: Hub, users) -> None:
+    """What the kit's callables and hook gave each server: its own class folder, the
+    class plan (written before the servers started), a hub prefix, no headless switch."""
+    servers = hub.server_pids()
+    assert set(servers) == set(users), sorted(servers)
+    for user, pid in servers.items():
+        env = environ_of(pid)
+        assert env["TUTOR_SESSION_DIR"] == str(hub.class_dir / user), env["TUTOR_SESSION_DIR"]
+        assert (hub.class_dir / user).is_dir()
+        assert env["TUTOR_CLASS_PLAN"] == str(hub.class_dir / "plan.csv")
+        assert env["JUPYTERHUB_SERVICE_PREFIX"] == f"/user/{user}/"
+        assert "TUTOR_HEADLESS" not in env
+
+
 def class_results(hub: Hub, out: Path) -> dict:
     """``python -m tutor class`` on the class folder; returns its class.json."""
     proc = subprocess.run(
@@ -271,9 +286,14 @@ def test_a_room_of_eight_trainees_on_the_kit_hub(tmp_path):
     with Hub(tmp_path / "hub") as hub, sync_playwright() as play:
         timings["hub_up_s"] = time.monotonic() - t_start
         users = BROWSER_USERS + KERNEL_USERS
+        # a class plan (Experiment 2's conditions, tutor.framework.assignment's CSV form):
+        # the kit passes it to every server started after it was written
+        hub.class_dir.mkdir(parents=True, exist_ok=True)
+        (hub.class_dir / "plan.csv").write_text("trainee,condition\ntrainee1,RF\n")
         hub.create_users(users)
         timings["servers_ready_s"] = hub.start_servers(users)
         sockets_with_servers = assert_loopback_only(hub, "servers started")
+        check_server_environment(hub, users)
 
         room = KernelRoom(hub, KERNEL_USERS)
         room.thread.start()
