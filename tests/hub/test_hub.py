@@ -140,6 +140,11 @@ class KernelRoom:
 # ---------------------------------------------------------------- browser trainees
 
 
+def browser_name(user: str) -> str:
+    """The name a browser trainee types (start_and_finish_nf's, for the name hub_<user>)."""
+    return f"browser hub_{user}"
+
+
 def log_in(page, hub: Hub, user: str) -> None:
     page.goto(f"{hub.url}/hub/login")
     page.locator("#username_input").fill(user)
@@ -209,11 +214,15 @@ def _cmdline(pid: int) -> bytes:
         return b""
 
 
-def check_notebook_03(page, hub: Hub, user: str) -> dict:
+def check_notebook_03(page, hub: Hub, user: str, name: str) -> dict:
     """Notebook 03's 3-D view renders in the widget mode; its kernel opens no Meshcat port."""
     before = set(hub.remember())
     open_and_run(page, hub, user, "03_pick_and_place.ipynb", ".lfd-start-form")
     form = page.locator(".lfd-start-form").last
+    # the same name as in notebook 02: one trainee, one folder
+    field = form.locator(".lfd-start-name input")
+    field.fill(name)
+    field.press("Tab")
     t0 = time.monotonic()
     form.locator(".lfd-start-go").click()
     view = page.locator(".lfd-scene3d-view").first
@@ -262,6 +271,28 @@ def check_server_environment(hub: Hub, users) -> None:
         assert "TUTOR_HEADLESS" not in env
 
 
+def check_run_files(hub: Hub, expected: dict[str, int]) -> None:
+    """Each user's folder of the class folder holds one trainee's NF (1 demo, finished)
+    and VF (``expected[name]`` demos) run records, read with the run record's checks."""
+    from tutor.framework.record import RunRecord
+
+    names = set()
+    for user in BROWSER_USERS + KERNEL_USERS:
+        folders = [f for f in (hub.class_dir / user).iterdir() if f.is_dir()]
+        assert len(folders) == 1, (user, folders)
+        runs = {
+            c: RunRecord.from_dict(json.loads((folders[0] / f"{c}.json").read_text()))
+            for c in ("NF", "VF")
+        }
+        name = runs["NF"].trainee.name
+        names.add(name)
+        assert folders[0].name == runs["NF"].trainee.key
+        assert runs["NF"].current.n_demos == 1 and runs["NF"].finished, (user, name)
+        assert runs["VF"].current.n_demos == expected[name], (user, name)
+        assert runs["VF"].finished is (name in KERNEL_USERS), (user, name)
+    assert names == set(expected)
+
+
 def class_results(hub: Hub, out: Path) -> dict:
     """``python -m tutor class`` on the class folder; returns its class.json."""
     proc = subprocess.run(
@@ -289,7 +320,8 @@ def test_a_room_of_eight_trainees_on_the_kit_hub(tmp_path):
         # a class plan (Experiment 2's conditions, tutor.framework.assignment's CSV form):
         # the kit passes it to every server started after it was written
         hub.class_dir.mkdir(parents=True, exist_ok=True)
-        (hub.class_dir / "plan.csv").write_text("trainee,condition\ntrainee1,RF\n")
+        plan = f"trainee,condition\n{browser_name(BROWSER_USERS[0])},RF\n"
+        (hub.class_dir / "plan.csv").write_text(plan)
         hub.create_users(users)
         timings["servers_ready_s"] = hub.start_servers(users)
         sockets_with_servers = assert_loopback_only(hub, "servers started")
@@ -339,7 +371,9 @@ def test_a_room_of_eight_trainees_on_the_kit_hub(tmp_path):
             memory = hub.memory_report()
             sockets_in_use = assert_loopback_only(hub, "8 trainees teaching")
 
-            notebook03 = check_notebook_03(pages[BROWSER_USERS[0]], hub, BROWSER_USERS[0])
+            notebook03 = check_notebook_03(
+                pages[BROWSER_USERS[0]], hub, BROWSER_USERS[0], browser_name(BROWSER_USERS[0])
+            )
             memory_03 = hub.memory_report()["per_user_mb"][BROWSER_USERS[0]]
             assert_loopback_only(hub, "notebook 03 open")
             for user in BROWSER_USERS:
@@ -385,11 +419,14 @@ def test_a_room_of_eight_trainees_on_the_kit_hub(tmp_path):
             f"p95 demo-to-feedback latency {report['p95_ms']:.0f} ms > {P95_TARGET_MS:.0f} ms"
         )
 
+        # every trainee's runs are in their own folder of the class folder
+        expected = {browser_name(u): N_BROWSER_DEMOS for u in BROWSER_USERS}
+        expected.update({t.user: len(t.latencies_ms) for t in room.trainees})
+        check_run_files(hub, expected)
+
         # the educator collects the room's runs
         data = class_results(hub, tmp_path / "class-results")
         assert data["experiment"] == 1
-        expected = {f"browser hub_{u}": N_BROWSER_DEMOS for u in BROWSER_USERS}
-        expected.update({t.user: len(t.latencies_ms) for t in room.trainees})
         found = {t["name"]: t for t in data["trainees"]}
         assert set(found) == set(expected), (sorted(found), data.get("skipped"))
         for name, n_vf in expected.items():
