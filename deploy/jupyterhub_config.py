@@ -83,21 +83,29 @@ def find_proxy() -> str:
     )
 
 
-def env_int(name: str, default: int) -> int:
+def env_number(name: str, default, kind=int):
+    """The environment variable ``name`` as a number of type ``kind`` (else ``default``)."""
     value = os.environ.get(name, "").strip()
     if not value:
         return default
     try:
-        return int(value)
+        return kind(value)
     except ValueError:
-        sys.exit(f"lfd-tutor hub kit: {name} is {value!r}; set it to a whole number")
+        what = "a whole number" if kind is int else "a number"
+        sys.exit(f"lfd-tutor hub kit: {name} is {value!r}; set it to {what}")
 
 
 # ---------------------------------------------------------------- hub and proxy
 
-STATE_DIR.mkdir(parents=True, exist_ok=True)
+try:
+    STATE_DIR.mkdir(parents=True, exist_ok=True)
+except OSError as exc:
+    sys.exit(
+        f"lfd-tutor hub kit: cannot make the hub's state folder {STATE_DIR} ({exc.strerror}); "
+        "run as root or set LFD_HUB_STATE_DIR to a folder you can write to"
+    )
 c.JupyterHub.ip = os.environ.get("LFD_HUB_IP", "127.0.0.1")
-c.JupyterHub.port = env_int("LFD_HUB_PORT", 8000)
+c.JupyterHub.port = env_number("LFD_HUB_PORT", 8000)
 c.JupyterHub.hub_ip = "127.0.0.1"
 c.JupyterHub.db_url = f"sqlite:///{STATE_DIR / 'jupyterhub.sqlite'}"
 c.JupyterHub.cookie_secret_file = str(STATE_DIR / "jupyterhub_cookie_secret")
@@ -134,7 +142,7 @@ else:
     c.SimpleLocalProcessSpawner.home_dir_template = str(STATE_DIR / "homes" / "{username}")
 
 c.Spawner.mem_limit = os.environ.get("LFD_MEM_LIMIT", "1G")
-c.Spawner.cpu_limit = float(os.environ.get("LFD_CPU_LIMIT", "1"))
+c.Spawner.cpu_limit = env_number("LFD_CPU_LIMIT", 1.0, float)
 # the single-user server of this very environment (where lfd-tutor is installed)
 c.Spawner.cmd = [str(Path(sys.executable).with_name("jupyterhub-singleuser"))]
 c.Spawner.default_url = "/lab"
@@ -221,7 +229,7 @@ c.JupyterHub.services = [
             sys.executable,
             "-m",
             "jupyterhub_idle_culler",
-            f"--timeout={env_int('LFD_IDLE_TIMEOUT', 3600)}",
+            f"--timeout={env_number('LFD_IDLE_TIMEOUT', 3600)}",
         ],
     }
 ]
