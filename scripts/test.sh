@@ -19,6 +19,18 @@ if ! command -v chromium >/dev/null 2>&1; then
     fi
 fi
 
+# The hub test (tests/hub) runs JupyterHub's proxy, configurable-http-proxy, from npm:
+# installed once into .hub/ (gitignored), where deploy/jupyterhub_config.py finds it.
+if [[ ! -x .hub/node_modules/.bin/configurable-http-proxy ]]; then
+    if ! command -v npm >/dev/null 2>&1; then
+        echo "lfd-tutor: the hub test needs npm for configurable-http-proxy;" \
+             "run 'sudo apt-get install npm' and try again." >&2
+        exit 1
+    fi
+    echo "lfd-tutor: installing configurable-http-proxy (npm) into .hub/ for the hub test" >&2
+    npm install --no-save --no-fund --no-audit --prefix .hub configurable-http-proxy >/dev/null
+fi
+
 source scripts/env.sh
 
 export TUTOR_HEADLESS=1
