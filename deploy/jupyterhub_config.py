@@ -28,7 +28,8 @@ What it sets up (deploy/README.md has the how-to):
   ``TUTOR_SESSION_DIR`` is ``<class folder>/<user name>``, made before their server
   starts, so the educator collects every run with ``lfd-tutor class <class folder>``.
   ``TUTOR_CLASS_PLAN`` points at ``<class folder>/plan.csv`` (or ``plan.json``) when
-  the educator wrote one (Experiment 2's conditions).
+  the educator wrote one (Experiment 2's conditions). Admins (educators) get
+  ``TUTOR_CLASS_DIR`` = the class folder, which notebook 05's dashboard reads.
 - Each trainee gets their own copy of the notebooks (``LFD_NOTEBOOKS``, default the
   repository's ``notebooks/``) in ``~/lfd-notebooks``, which JupyterLab opens.
 - The hub listens on 127.0.0.1:8000 unless ``LFD_HUB_IP`` (e.g. ``0.0.0.0`` to let the
@@ -212,6 +213,8 @@ def pre_spawn_hook(spawner) -> None:
     plan = class_plan()
     if plan is not None:  # read when the server starts: a plan written later counts
         spawner.environment = {**spawner.environment, "TUTOR_CLASS_PLAN": str(plan)}
+    if spawner.user.admin:  # the educator's dashboard (notebook 05) reads the whole class
+        spawner.environment = {**spawner.environment, "TUTOR_CLASS_DIR": str(CLASS_DIR)}
 
 
 c.Spawner.pre_spawn_hook = pre_spawn_hook
