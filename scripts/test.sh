@@ -23,9 +23,15 @@ fi
 # installed once into .hub/ (gitignored), where deploy/jupyterhub_config.py finds it.
 if [[ ! -x .hub/node_modules/.bin/configurable-http-proxy ]]; then
     if ! command -v npm >/dev/null 2>&1; then
-        echo "lfd-tutor: the hub test needs npm for configurable-http-proxy;" \
-             "run 'sudo apt-get install npm' and try again." >&2
-        exit 1
+        if [[ "$(id -u)" -eq 0 ]] && command -v apt-get >/dev/null 2>&1; then
+            echo "lfd-tutor: installing Debian's npm for the hub test's proxy" >&2
+            apt-get update -qq
+            DEBIAN_FRONTEND=noninteractive apt-get install -y -qq npm >/dev/null
+        else
+            echo "lfd-tutor: the hub test needs npm for configurable-http-proxy;" \
+                 "run 'sudo apt-get install npm' and try again." >&2
+            exit 1
+        fi
     fi
     echo "lfd-tutor: installing configurable-http-proxy (npm) into .hub/ for the hub test" >&2
     npm install --no-save --no-fund --no-audit --prefix .hub configurable-http-proxy >/dev/null
