@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, TutorError
 from ..framework import RunOverError, TeachingRun
 from ..framework.record import utc_now
 from .hint import Hint, next_demo_hint
@@ -244,13 +244,22 @@ class PickPlaceRun(TeachingRun):
             self._hint = cached
         return cached[1]
 
+    def _followed_hint(self, plant: int) -> bool | None:
+        """Whether ``plant`` is the hinted one; None when no hint could be computed (the
+        trainee then had none to follow, and teaching goes on without it)."""
+        try:
+            return plant == self.hint().plant
+        except TutorError:
+            return None
+
     # ---------------------------------------------------------------- teaching
 
     def demonstrate(self, plant: int, raw=None, mistake=None, rng=None, chosen_by: str = ""):
         """Give one demonstration to ``plant`` (recorded, or generated kinesthetically).
 
-        In HF it records whether ``plant`` is the hinted one (``Demo.followed_rule``);
-        a demo added with :meth:`add_demo` (e.g. loaded from a file) records nothing.
+        In HF it records whether ``plant`` is the hinted one (``Demo.followed_rule``;
+        None when no hint could be given); a demo added with :meth:`add_demo` (e.g.
+        loaded from a file) records nothing.
 
         Raises
         ------
@@ -265,7 +274,7 @@ class PickPlaceRun(TeachingRun):
         if raw is None:
             raw = self.task.demonstrate(plant, rng, mistake=mistake)
         seconds = self.task.duration(raw)
-        followed = plant == self.hint().plant if self.hinted else None
+        followed = self._followed_hint(plant) if self.hinted else None
         return self.add_demo(
             raw,
             condition=self.task.conditions[plant],
