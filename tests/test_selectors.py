@@ -255,7 +255,7 @@ def test_af_costs_what_bf_costs(task):
     assert (af.selector.name, af.k) == ("disagreement", 5)
     assert PickPlaceRun("AF", task, k=2).feedback_seconds == 50.0
     assert list(CONDITIONS) == ["NF", "RF", "BF", "SF"]  # the paper's four, unchanged
-    assert list(ALL_CONDITIONS) == ["NF", "RF", "BF", "SF", "AF"]
+    assert list(ALL_CONDITIONS) == ["NF", "RF", "BF", "SF", "AF", "HF"]
 
 
 @pytest.mark.parametrize("selector", ["random", "disagreement"])
@@ -329,8 +329,8 @@ def test_the_start_form_offers_af_after_the_papers_four(tmp_path, monkeypatch):
 
     form = pick_and_place_experiment(scene3d=False)
     buttons = form.condition_buttons
-    assert list(buttons.options) == ["NF", "RF", "BF", "SF", "AF"] and form.condition == "BF"
-    assert "beyond the paper" in buttons.tooltips[-1] and "beyond the paper" in (
+    assert list(buttons.options) == ["NF", "RF", "BF", "SF", "AF", "HF"] and form.condition == "BF"
+    assert "beyond the paper" in buttons.tooltips[-2] and "beyond the paper" in (
         form.beyond_note.value
     )
     monkeypatch.setenv("TUTOR_CONDITION", "af")

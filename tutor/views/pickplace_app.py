@@ -3,18 +3,21 @@
 The trainee clicks a plant on the tray map, then *Demonstrate*: the tutor guides the
 arm to that plant as a person would in kinesthetic teaching (optionally with a
 mistake, to see what it does). What the robot then shows depends on the condition
-(NF, RF, BF, SF; and AF, beyond the paper, whose picks the tray map shows as it shows
-BF's batch; see :mod:`tutor.tasks.pickplace_protocol`), and the clock counts the
-teaching time the paper's trainees had (15 minutes; 25 s per robot attempt).
+(NF, RF, BF, SF; and, beyond the paper, AF, whose picks the tray map shows as it shows
+BF's batch, and HF, NF with a next-demo hint; see :mod:`tutor.tasks.pickplace_protocol`),
+and the clock counts the teaching time the paper's trainees had (15 minutes; 25 s per
+robot attempt).
 
 Tray colours (as in the paper's good-versus-bad figure): green, the robot succeeds;
 dark red ✗, it fails; blue ●, demonstrated;
-grey, not shown to the trainee (yet).
+grey, not shown to the trainee (yet). HF marks the hinted plant ★ (its tooltip says so,
+and its button has the CSS class ``lfd-hint``); the hint is also said in words.
 """
 
 from __future__ import annotations
 
 import html
+import logging
 import time
 
 import ipywidgets as w
@@ -27,9 +30,18 @@ from ..tasks.pickplace import PickPlaceTask
 from ..tasks.pickplace_protocol import PickPlaceRun
 from .app import TutorApp, guarded
 from .style import DEMO, FAIL, PASS, UNKNOWN
-from .text import compose, finish_summary, optimal_sentence, plain_reason
+from .text import (
+    HINT_GLYPH,
+    compose,
+    finish_summary,
+    hint_sentence,
+    optimal_sentence,
+    plain_reason,
+)
 
 __all__ = ["PickPlaceTutor", "tray_status", "compare_runs", "PAPER_MEAN_ETA", "PAPER_THIRD_RUN_ETA"]
+
+log = logging.getLogger(__name__)
 
 #: a click that arrives this soon after a demo ended is the second half of a double click
 DOUBLE_CLICK_SECONDS = 0.4
@@ -79,7 +91,7 @@ class PickPlaceTutor(TutorApp):
 
     Parameters
     ----------
-    condition : {"NF", "RF", "BF", "SF", "AF"}
+    condition : {"NF", "RF", "BF", "SF", "AF", "HF"}
     session_file : path, optional
         Autosave after every demonstration; an existing file of the same run is resumed.
     task : PickPlaceTask, optional
@@ -345,11 +357,13 @@ class PickPlaceTutor(TutorApp):
 
     # ---------------------------------------------------------------- display
 
-    def _draw_tray(self, status, rec) -> None:
+    def _draw_tray(self, status, rec, hinted: int | None = None) -> None:
         """Colour, glyph and tooltip of every plant; exactly one drawn as selected.
 
         Status is never shown by colour alone: pass ✓, fail ✗, demonstrated ●, not seen
         blank; the tooltip names the plant, its status and, for a shown failure, why.
+        The ``hinted`` plant (HF) gets ★ after its glyph, a tooltip that says so and the
+        class ``lfd-hint``; its colour and the selected plant's frame are unchanged.
         """
         for i, b in enumerate(self.plant_buttons):
             kind = status[i]
@@ -358,22 +372,44 @@ class PickPlaceTutor(TutorApp):
                 words += f": {plain_reason(rec.reasons[i])}"
             if kind in ("pass", "fail") and rec is not None and rec.demonstrated[i]:
                 words += " (demonstrated)"
-            selected = i == self.selected
+            selected, hint = i == self.selected, i == hinted
+            if hint:
+                words += "; the robot would learn most from here next (hint)"
             tip = f"{self.task.plant_name(i)}: {words}" + (" (selected)" if selected else "")
             _set(b.style, "button_color", TRAY_COLOURS[kind])
             _set(b.style, "text_color", TRAY_TEXT[kind])
-            _set(b, "description", TRAY_GLYPHS[kind])
+            _set(b, "description", TRAY_GLYPHS[kind] + (HINT_GLYPH if hint else ""))
             _set(b, "tooltip", tip)
             _set(b.layout, "border", "3px solid #111111" if selected else "1px solid #ffffff")
-            if selected:
-                b.add_class("lfd-selected")
-            else:
-                b.remove_class("lfd-selected")
+            for css, on in (("lfd-selected", selected), ("lfd-hint", hint)):
+                if on:
+                    b.add_class(css)
+                else:
+                    b.remove_class(css)
+
+    def current_hint(self):
+        """HF's next-demo hint while the run is open (None in the other conditions, once
+        finished, or when it cannot be computed: the panel then says why)."""
+        run = self.run
+        if not run.hinted or run.finished:
+            return None
+        try:
+            return run.hint()
+        except TutorError as exc:
+            self.message = f"No hint this time: {exc}"
+        except Exception as exc:  # the hint is an extra: it must not cost the trainee the run
+            log.exception("the next-demo hint failed")
+            self.message = (
+                f"No hint this time: something went wrong inside the tutor "
+                f"({type(exc).__name__}). Your demonstrations are kept; carry on without it."
+            )
+        return None
 
     def refresh(self) -> None:
         run, rec = self.run, self.run.session.latest
         status = tray_status(run, reveal=run.finished)
-        self._draw_tray(status, rec)
+        hint = self.current_hint()
+        self._draw_tray(status, rec, None if hint is None else hint.plant)
         sf_or_after = run.condition == "SF" or run.finished
         self.buttons["Test plant"].disabled = not sf_or_after or rec is None or self.read_only
         for name in ("Demonstrate", "Undo"):
@@ -397,6 +433,7 @@ class PickPlaceTutor(TutorApp):
             generated=demo is not None and demo.chosen_by == "guided",
             mistake=demo.mistake if demo is not None else "",
             finished=run.finished,
+            rule_message=None if hint is None else hint_sentence(self.task, hint.plant),
         )
         parts.append(
             "<ul class='lfd-feedback'>"
@@ -414,10 +451,20 @@ class PickPlaceTutor(TutorApp):
             self.scene3d.update(run, status)
 
 
+#: the paper's condition each condition beyond it is compared with, and why
+BEYOND_THE_PAPER = {
+    "AF": ("BF", "costs the same"),
+    "HF": ("NF", "shows nothing either, only without the hint"),
+}
+
+
 def paper_condition(condition: str) -> str:
-    """The paper's condition a run's score is compared with: its own, or for AF (beyond
-    the paper) BF, which shows as many robot attempts and so costs the same time."""
-    return condition if condition in PAPER_MEAN_ETA else "BF"
+    """The paper's condition a run's score is compared with: its own; for AF (beyond the
+    paper) BF, which shows as many robot attempts and so costs the same time; for HF
+    (beyond the paper) NF, which shows nothing either and lacks only the hint."""
+    if condition in PAPER_MEAN_ETA:
+        return condition
+    return BEYOND_THE_PAPER.get(condition, ("BF", ""))[0]
 
 
 def compare_runs(tutors) -> str:
@@ -439,7 +486,8 @@ def compare_runs(tutors) -> str:
         return "\n".join(lines)
     own = tutors[0].run.condition
     cond = paper_condition(own)
-    beyond = "" if cond == own else f" ({own} is beyond the paper; {cond} costs the same)"
+    why = BEYOND_THE_PAPER.get(own, (cond, "costs the same"))[1]
+    beyond = "" if cond == own else f" ({own} is beyond the paper; {cond} {why})"
     lines.append(
         f"\nYour mean eta: {np.mean(etas):.1%}. The paper's 9 trainees in {cond}{beyond}: mean "
         f"{PAPER_MEAN_ETA[cond]:.1%} over the runs, {PAPER_THIRD_RUN_ETA[cond]:.1%} in the third."

@@ -11,9 +11,11 @@ instruction and worked example (:mod:`tutor.views.worked_example`):
   the page, with what they revealed.
 - Experiment 2 (:func:`pick_and_place_experiment`): runs 1, 2 and 3 in the chosen
   condition, one after another in the same way. The paper's four conditions come first
-  (the default is BF); AF, adaptive feedback, is offered after them as an extra
-  condition *beyond the paper* (the robot tries the 5 plants it picks itself, at BF's
-  cost; :mod:`tutor.framework.selectors`).
+  (the default is BF); AF, adaptive feedback, and HF, the next-demo hint, are offered
+  after them as extra conditions *beyond the paper* (AF: the robot tries the 5 plants
+  it picks itself, at BF's cost, :mod:`tutor.framework.selectors`; HF: nothing is shown,
+  as in NF, but the tutor names the plant the robot would learn most from next,
+  :mod:`tutor.tasks.hint`).
 
 When every run is finished the trainee's scores are shown beside the paper's.
 
@@ -28,7 +30,7 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
     The trainee's name (see :func:`tutor.runtime.default_trainee`); the name field is
     then locked. Without it, ``JUPYTERHUB_USER`` is the default on a hub.
 ``TUTOR_CONDITION``
-    Experiment 2's condition (NF, RF, BF or SF; or AF, beyond the paper) for everyone
+    Experiment 2's condition (NF, RF, BF or SF; or AF or HF, beyond the paper) for everyone
     on this server; the
     condition buttons are then locked and say why. A value that is not a condition is
     refused with a message. It wins over the class plan.
@@ -94,19 +96,22 @@ PICKPLACE_AUTOPLAY = {
 }
 #: the condition offered first when neither the trainee nor the educator chose one
 DEFAULT_CONDITION = "BF"
-#: what each condition's button says on hover; AF's says it is beyond the paper
+#: what each condition's button says on hover; AF's and HF's say they are beyond the paper
 CONDITION_TIPS = {
     "NF": "NF: no feedback while teaching",
     "RF": "RF: the robot replays the plant you demonstrated",
     "BF": "BF: the robot tries five sample plants after each demo",
     "SF": "SF: you choose which plants the robot tries",
     "AF": "AF (beyond the paper): the robot tries the five plants it picks itself",
+    "HF": "HF (beyond the paper): no feedback, but a hint of where to demonstrate next",
 }
-#: the line under the condition buttons that says what AF is
+#: the line under the condition buttons that says what AF and HF are
 BEYOND_THE_PAPER = (
-    "AF, adaptive feedback, is beyond the paper: after each demonstration the robot "
-    "tries the five plants it finds least certain (where what it learnt from the start, "
-    "the plant and the bin disagrees, or far from your demonstrations), at BF's cost. "
+    "AF and HF are beyond the paper. AF, adaptive feedback: after each demonstration the "
+    "robot tries the five plants it finds least certain (where what it learnt from the "
+    "start, the plant and the bin disagrees, or far from your demonstrations), at BF's "
+    "cost. HF, a next-demo hint: as in NF you see nothing while teaching, but the tutor "
+    "names the plant the robot would learn most from next (it costs no time). "
     "The paper's four conditions are NF, RF, BF and SF."
 )
 
@@ -117,8 +122,8 @@ def condition_from_env() -> str | None:
     Raises
     ------
     InvalidParameterError
-        ``TUTOR_CONDITION`` is set but is not one of NF, RF, BF, SF (or AF, beyond the
-        paper).
+        ``TUTOR_CONDITION`` is set but is not one of NF, RF, BF, SF (or AF or HF, beyond
+        the paper).
     """
     value = os.environ.get("TUTOR_CONDITION", "").strip()
     if not value:

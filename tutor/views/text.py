@@ -34,7 +34,12 @@ __all__ = [
     "summary",
     "session_report",
     "plain_reason",
+    "hint_sentence",
+    "HINT_GLYPH",
 ]
+
+#: the mark of the hinted plant on the tray map (HF), besides its tooltip
+HINT_GLYPH = "★"
 
 #: the paper's coverage target (Experiment 1's 90 %)
 TARGET = 0.9
@@ -44,6 +49,18 @@ def plain_reason(reason: str) -> str:
     """A failure reason without sample numbers ("hit obstacle 2 at sample 57" -> "hit
     obstacle 2")."""
     return re.sub(r"\s*\(?\bat sample \d+(?: of \d+)?\)?", "", reason).strip()
+
+
+def hint_sentence(task, plant: int) -> str:
+    """HF's next-demo hint in words, e.g. "The robot would learn most from plant row 3,
+    column 7 next (★ on the tray map)"."""
+    cols = getattr(getattr(task, "scene", None), "cols", None)
+    if cols:
+        r, c = divmod(int(plant), cols)
+        where = f"{task.condition_noun} row {r + 1}, column {c + 1}"
+    else:
+        where = _name(task, plant)
+    return f"The robot would learn most from {where} next ({HINT_GLYPH} on the tray map)."
 
 
 def _name(task, index: int) -> str:
@@ -181,7 +198,8 @@ def compose(
     history : sequence of FeedbackRecord
         The earlier records (for "90 % reached" said once, and earlier wrong demos).
     rule_message : str, optional
-        VR: the rule that applies next (then it is the only next step).
+        VR: the rule that applies next; HF: the next-demo hint (:func:`hint_sentence`).
+        It is then the only next step.
     generated : bool
         The demo was made by the tutor's simulated hand, not drawn by the trainee.
     mistake : str
@@ -216,8 +234,9 @@ def finish_summary(run, paper: float, statistic: str, condition: str | None = No
     """The one score of a finished run, by its experiment's rule, beside the paper's.
 
     ``paper`` is the paper's figure for ``condition`` (default the run's) and
-    ``statistic`` its kind ("median" or "mean"). A condition beyond the paper (AF) is
-    compared with the paper's condition of the same cost (BF).
+    ``statistic`` its kind ("median" or "mean"). A condition beyond the paper is
+    compared with the paper's condition it extends: AF with BF (the same cost), HF with
+    NF (nothing shown either; HF adds the hint).
     """
     if run.n_demos == 0:
         return "No demonstrations were given."
@@ -225,7 +244,7 @@ def finish_summary(run, paper: float, statistic: str, condition: str | None = No
     if condition is not None and condition != run.condition:
         beyond = (
             f" {run.condition} is beyond the paper; it is compared with {condition}, the "
-            "paper's condition it replaces."
+            "paper's condition closest to it."
         )
     s = run.score(TARGET)
     if run.score_rule == "target":

@@ -66,6 +66,11 @@ INSTRUCTIONS = {
         "plants it picks itself, where it is least sure of what it learnt: green "
         "succeeds, dark red fails. It costs 125 s of your 15 minutes, like BF."
     ),
+    (2, "HF"): (
+        "Hint (beyond the paper). As in NF you see nothing while teaching, but before "
+        "each demonstration the tutor names the plant the robot would learn most from "
+        "next, marked ★ on the tray map. Follow it or choose yourself; it costs no time."
+    ),
 }
 
 #: the plants the pick-and-place example demonstrates, and the ones SF asks to test
@@ -202,6 +207,9 @@ def _pickplace_frames(axes, condition: str) -> None:
     first, second = _EXAMPLE_PLANTS
     run.demonstrate(first, rng=rng)
     shown_after_first = _status(run, reveal=False)
+    hinted = run.hint().plant if condition == "HF" else None
+    if hinted is not None:  # the example follows the hint
+        second = hinted
     if condition == "SF":
         run.test(list(_SF_TESTS))
         shown_after_first = _status(run, reveal=False)
@@ -217,9 +225,10 @@ def _pickplace_frames(axes, condition: str) -> None:
         "BF": "2. The robot tries five plants",
         "SF": "2. You see the plants you test",
         "AF": "2. The robot tries five plants it picks",
+        "HF": f"2. The hint: {task.plant_name(second)} ★",
     }
-    _tray(axes[1], task, shown_after_first, captions[condition])
-    if condition == "NF":
+    _tray(axes[1], task, shown_after_first, captions[condition], hinted)
+    if condition in ("NF", "HF"):
         _tray(axes[2], task, revealed, "3. After the run: every plant")
     else:
         _tray(axes[2], task, _status(run, reveal=False), "3. After the next demo")
@@ -231,9 +240,10 @@ def _status(run, reveal: bool) -> np.ndarray:
     return tray_status(run, reveal=reveal)
 
 
-def _tray(ax, task, status, title: str) -> None:
+def _tray(ax, task, status, title: str, hinted: int | None = None) -> None:
     """The tray as the map draws it (as the 3-D view's camera sees it): row 1, nearest
-    the robot, at the top; column 1 on the left; status by colour and glyph."""
+    the robot, at the top; column 1 on the left; status by colour and glyph; the
+    ``hinted`` plant (HF) marked ★."""
     colours = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
     glyphs = {"pass": "✓", "fail": "✗", "demo": "●", "unknown": ""}
     rows, cols = task.scene.rows, task.scene.cols
@@ -243,6 +253,9 @@ def _tray(ax, task, status, title: str) -> None:
         if glyphs[s]:
             ax.text(c, rows - 1 - r, glyphs[s], ha="center", va="center", fontsize=5,
                     color="white")
+    if hinted is not None:
+        r, c = divmod(int(hinted), cols)
+        ax.text(c, rows - 1 - r, "★", ha="center", va="center", fontsize=9, color="black")
     ax.set_xlim(-0.6, cols - 0.4)
     ax.set_ylim(-0.6, rows + 0.6)
     ax.set_aspect("equal")
