@@ -239,6 +239,20 @@ def fail_on_errors(errors: list[str], name: str) -> None:
         pytest.fail(f"{len(errors)} page/console error(s) (see {log.name}): {errors[0][:500]}")
 
 
+def accept_kernel_dialog(pg) -> None:
+    """Whenever JupyterLab asks "Select Kernel" although the notebook's session has one
+    (it does so now and then, more often on a loaded machine, and at any moment while the
+    notebook opens), press Select, as a person would, before the test's next action."""
+    dialog = pg.locator(".jp-Dialog", has_text="Select Kernel")
+
+    def accept(_):
+        button = dialog.get_by_role("button", name="Select", exact=True)
+        if button.count():
+            button.click()
+
+    pg.add_locator_handler(dialog, accept)
+
+
 @pytest.fixture
 def page(browser, tmp_path, request):
     """A fresh page; the test fails at teardown on any page error or console error.
@@ -249,6 +263,7 @@ def page(browser, tmp_path, request):
     context = browser.new_context(viewport={"width": 1400, "height": 1000})
     pg = context.new_page()
     errors = watch_errors(pg)
+    accept_kernel_dialog(pg)
     yield pg
     context.close()
     fail_on_errors(errors, request.node.name)

@@ -41,6 +41,7 @@ import numpy as np
 import pytest
 
 from tests.browser.conftest import (
+    accept_kernel_dialog,
     axe_check,
     fail_on_errors,
     start_notebook_kernel,
@@ -136,6 +137,7 @@ def pages(browser, jupyterlab):
     def new_page(name: str):
         context = browser.new_context(viewport={"width": 1400, "height": 1000})
         pg = context.new_page()
+        accept_kernel_dialog(pg)
         contexts.append(context)
         watched.append((name, watch_errors(pg)))
         return pg

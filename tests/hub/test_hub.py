@@ -47,6 +47,7 @@ from tests.browser.conftest import (
     ARTIFACTS,
     CHROMIUM,
     CHROMIUM_FLAGS,
+    accept_kernel_dialog,
     fail_on_errors,
     watch_errors,
 )
@@ -338,6 +339,7 @@ def test_a_room_of_eight_trainees_on_the_kit_hub(tmp_path):
                 context = browser.new_context(viewport={"width": 1400, "height": 1000})
                 page = context.new_page()
                 errors[user] = watch_errors(page)
+                accept_kernel_dialog(page)
                 log_in(page, hub, user)
                 open_and_run(page, hub, user, "02_maze_experiment.ipynb", ".lfd-start-go")
                 pages[user] = page
