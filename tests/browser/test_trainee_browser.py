@@ -308,7 +308,9 @@ def test_condition_shows_only_its_r(pickplace_page, artifacts, condition):
     assert all(b["glyph"] in PASS_FAIL | {"●"} for b in tray), [b["glyph"] for b in tray]
     assert sum(b["glyph"] == "●" for b in tray) == 1
     text = tutor.inner_text()
-    assert text.count("η") == 1, text
+    # one score, said once, and the optimal teacher's reference beside it
+    assert text.count("teaching efficiency is η") == 1, text
+    assert text.count("the best possible η") == 1, text
     assert "Run over." in text and "efficacy ε" in text
     # run 2 appears under run 1, as the paper ran them
     _run_tutor(_form(page, condition), 2).wait_for(timeout=60_000)
