@@ -132,7 +132,12 @@ class TPGMM:
         em = EM(U, K, self.reg_covar)
 
         if self.warm_start and self._is_compatible(data):
-            gamma_params = self._standardised_params(loc, scale)
+            # a sample is explained if its log density is within one nat per dimension
+            # of the previous fit's mean (both in the new standardised units)
+            P, D = scale.shape
+            floor = self.lower_bound_ + float(np.log(scale).sum()) - P * D
+            previous = self._standardised_params(loc, scale)
+            gamma_params = em.m_step(em.warm_responsibilities(previous, floor))
         else:
             gamma_params = em.m_step(self._initial_responsibilities(data, U))
 
