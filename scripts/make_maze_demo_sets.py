@@ -44,14 +44,14 @@ SETS = {
     "good": (
         "A good teacher: starts spread over the start zone (and over its height), each "
         "where the robot still failed; reaches 90 % coverage within 8 demos.",
-        # efficacy 3 %, 32 %, 94 %, 99 %, 100 %; the later two where it still failed
+        # efficacy 3 %, 32 %, 98 %, 99 %, 100 %; the later two where it still failed
         [(0.03, 0.03), (0.17, 0.045), (0.10, 0.01), (0.195, 0.005), (0.195, 0.055)],
         {},
     ),
     "ambiguous": (
         "An ambiguous teacher: after three demos spread out, the next three start within a "
         "few millimetres of the third and add almost nothing.",
-        # efficacy 3 %, 32 %, 92 %, then 94 %, 94 %, 96 %: demos 5 and 6 are flagged
+        # efficacy 3 %, 32 %, 99 %, then no change: demos 4, 5 and 6 are flagged
         [(0.03, 0.03), (0.17, 0.045), (0.10, 0.01), (0.102, 0.013), (0.097, 0.008), (0.101, 0.007)],
         {},
     ),

@@ -142,7 +142,7 @@ def test_warm_start_refits_quickly_and_as_well(layout):
     """Adding the 12th demo: the warm refit is quicker than a cold fit and as good.
 
     Warm and cold fits may end in different local optima (measured on these five sets:
-    the warm objective is -0.053 .. +0.14 from the cold one, median +0.0001), so "as
+    the warm objective is -0.052 .. +0.14 from the cold one, median +0.0001), so "as
     good" is asserted on the median over the sets, with a bound on each.
     """
     gains = []

@@ -132,10 +132,11 @@ class TPGMM:
         em = EM(U, K, self.reg_covar)
 
         if self.warm_start and self._is_compatible(data):
-            # a sample is explained if its log density is within one nat per dimension
-            # of the previous fit's mean (both in the new standardised units)
+            # a sample is explained if its log density is within two nats per dimension
+            # of the previous fit's mean (both in the new standardised units); one nat
+            # flagged ordinary new demos too and doubled the warm refit's iterations
             P, D = scale.shape
-            floor = self.lower_bound_ + float(np.log(scale).sum()) - P * D
+            floor = self.lower_bound_ + float(np.log(scale).sum()) - 2 * P * D
             previous = self._standardised_params(loc, scale)
             gamma_params = em.m_step(em.warm_responsibilities(previous, floor))
         else:
