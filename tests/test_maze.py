@@ -157,15 +157,24 @@ def test_two_demos_from_one_side_leave_most_of_the_grid_red(task):
     assert r.efficacy < 0.5
 
 
-def test_a_guided_teacher_needs_five_to_nine_demos(task):
-    """Demo where the robot fails, farthest from earlier demos: median 5-8 to reach 90 %."""
+def test_a_guided_teacher_needs_three_demos_and_never_loses_ground(task):
+    """Demo where the robot fails, farthest from earlier demos: 3 demos reach 90 %.
+
+    Measured with the learner of issue 14 (seeds 0-4: efficacy 0.02-0.03, 0.21-0.33,
+    then 0.93-1.0). The learner before it needed 5-9 (median 7), but only because its
+    warm refits fell to 0 % for two to four demos in a row after the second demo; a
+    greedy machine teacher reaches 100 % with 3 demos on this maze too.
+    """
     needed = []
     for seed in range(5):
         rng = np.random.default_rng(seed)
         s = TeachingSession(task)
         start = task.layout.sample_starts(1, rng)[0]
+        best = 0.0
         for _ in range(12):
             r = s.add_demo(task.layout.reference_path(start, rng, jitter=0.004))
+            assert r.efficacy >= 0.5 * best  # no collapse after a demo where it failed
+            best = max(best, r.efficacy)
             if r.efficacy >= 0.9:
                 break
             fail = task.conditions[~r.passed]
@@ -173,5 +182,5 @@ def test_a_guided_teacher_needs_five_to_nine_demos(task):
             far = np.linalg.norm(fail[:, None] - starts[None], axis=2).min(axis=1)
             start = np.clip(fail[np.argmax(far)] + rng.normal(0, 0.003, 2), 0.003, [0.197, 0.057])
         needed.append(s.n_demos if r.efficacy >= 0.9 else 99)
-    assert 5 <= np.median(needed) <= 8
-    assert max(needed) <= 12
+    assert np.median(needed) == 3
+    assert max(needed) <= 4

@@ -55,7 +55,10 @@ linalg
 Implementation notes
 --------------------
 * Each frame's local data are standardised (per dimension) before EM, so that
-  ``reg_covar`` is a variance *relative to the data's spread*, in any units.
+  ``reg_covar`` is a variance *relative to the data's spread*, in any units. That
+  spread is the whole movement's, far larger than a start or goal frame's spread at
+  its own end, so ``reg_covar`` must be small (default 3e-5; 1e-3 cost 3-6 mm at the
+  start points, see :class:`TPGMM`).
 * EM works on sufficient statistics: with quadratic features
   :math:`\phi(u) = (u_i u_j)_{i \le j} \Vert u \Vert 1` of the standardised
   local states, the E-step is one matrix product ``Phi @ W`` and the M-step is
