@@ -127,19 +127,24 @@ def _parser() -> argparse.ArgumentParser:
 
 def class_command(args) -> None:
     """``lfd-tutor class``: read, analyse, print the report and (``--out``) save."""
-    from .study.class_report import analyse_class, format_class_report, save_class
     from .study.classroom import read_class
     from .study.report import check_out_dir
 
     if args.out is not None:
         check_out_dir(args.out)
-    def load_statistics():  # pingouin takes a second to import: do it while runs replay
-        import pingouin  # noqa: F401
+
+    def load_the_rest():  # statistics and figures take a second to import: do it while
+        import matplotlib.pyplot  # noqa: F401
+        import pingouin  # noqa: F401  # the workers replay the runs
+
+        from .study import class_report  # noqa: F401
 
     result = read_class(
         args.sessions, args.experiment, workers=args.workers, plan=args.plan,
-        meanwhile=load_statistics,
+        meanwhile=load_the_rest,
     )
+    from .study.class_report import analyse_class, format_class_report, save_class
+
     analysis = analyse_class(result)
     print(format_class_report(result, analysis))
     if args.out is not None:

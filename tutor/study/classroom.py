@@ -279,12 +279,39 @@ def _read_member(archive_path: str, name: str):
     return parse_json(decode_text(data, shown, "run file"), shown, "run file")
 
 
+@dataclass(frozen=True)
+class _Meta:
+    """What deciding between copies of one run needs of a record (cheap to send back)."""
+
+    key: tuple
+    finished: bool
+    latest: str
+    label: str
+    name: str
+
+
 def _read(item):
-    """Worker: read and check one file; ``item`` is (source, is_zip, label, experiment)."""
-    source, is_zip, label, experiment = item
+    """Worker: read, check and (when it may count) replay one file, in one pass.
+
+    ``item`` is (source, is_zip, label, experiment, settings); gives (FileOutcome, _Meta
+    or None, the replay's (kind, reason, run row, demo rows) or None).
+    """
+    source, is_zip, label, experiment, settings = item
     if is_zip:
-        return _check(label, lambda: _read_member(source, label), experiment)
-    return _check(label, lambda: read_json(Path(source) / label, "run file"), experiment)
+        outcome, record = _check(label, lambda: _read_member(source, label), experiment)
+    else:
+        where = Path(source) / label
+        outcome, record = _check(label, lambda: read_json(where, "run file"), experiment)
+    if record is None:
+        return outcome, None, None
+    meta = _Meta(
+        (record.trainee.key, record.condition, record.run),
+        record.finished,
+        _latest(record),
+        record.label,
+        record.trainee.name,
+    )
+    return outcome, meta, _replay((label, record, experiment, settings))[1:]
 
 
 # ---------------------------------------------------------------- one file
@@ -453,10 +480,11 @@ def read_class(
     context = (str(path.resolve()), experiment, settings)  # a cache is for one class
     memo = _Memo(None if is_zip else cache, path, labels, context)
     with _Pool(workers) as pool:
-        fresh = memo.todo(labels, "read")
-        read = pool.map(_read, [(str(path), is_zip, lab, experiment) for lab in fresh])
-        outcomes = memo.merge(labels, "read", dict(zip(fresh, read, strict=True)))
-        result = _score(path, experiment, outcomes, pool, settings, meanwhile, memo)
+        fresh = memo.todo(labels, "file")
+        items = [(str(path), is_zip, lab, experiment, settings) for lab in fresh]
+        done = pool.map(_read, items, meanwhile)
+        outcomes = memo.merge(labels, "file", dict(zip(fresh, done, strict=True)))
+    result = _score(path, experiment, outcomes, settings)
     result.roster = roster
     return result
 
@@ -548,57 +576,42 @@ class _Pool:
 def _duplicates(outcomes) -> dict[str, str]:
     """label -> the label of the file counted instead, for files repeating a run."""
     groups: dict[tuple, list] = {}
-    for outcome, record in outcomes:
-        if record is not None:
-            key = (record.trainee.key, record.condition, record.run)
-            groups.setdefault(key, []).append((outcome, record))
+    for outcome, meta, _ in outcomes:
+        if meta is not None and outcome.counted:
+            groups.setdefault(meta.key, []).append((outcome, meta))
     beaten = {}
     for members in groups.values():
         if len(members) < 2:
             continue
         # the finished one, then the one changed last, then the shorter name (NF.json
         # before the NF-2.json the tutor saves beside it)
-        best = max(members, key=lambda m: (m[1].finished, _latest(m[1]), -len(m[0].file)))[0]
+        best = max(members, key=lambda m: (m[1].finished, m[1].latest, -len(m[0].file)))[0]
         for outcome, _ in members:
             if outcome is not best:
                 beaten[outcome.file] = best.file
     return beaten
 
 
-def _score(path: Path, experiment: int, outcomes, pool: _Pool, settings, meanwhile, memo):
+def _score(path: Path, experiment: int, outcomes, settings) -> ClassResult:
     beaten = _duplicates(outcomes)
-    files, todo = [], []
-    for outcome, record in outcomes:
-        if record is not None and outcome.file in beaten:
-            info = _summary(record)
-            outcome = FileOutcome(
-                outcome.file,
-                "duplicate",
-                f"{beaten[outcome.file]} holds the same run ({record.label} of "
-                f"{record.trainee.name}); that file is counted",
-                **info,
+    files, rows, demo_rows = [], [], []
+    for outcome, meta, replayed in outcomes:
+        if outcome.file in beaten:
+            outcome = replace(
+                outcome,
+                kind="duplicate",
+                reason=f"{beaten[outcome.file]} holds the same run ({meta.label} of "
+                f"{meta.name}); that file is counted",
             )
-            record = None
+        elif outcome.counted:
+            kind, reason, row, extra = replayed
+            if kind != "counted":
+                outcome = replace(outcome, kind=kind, reason=reason)
+            else:
+                who = {"trainee": outcome.trainee, "trainee_key": outcome.trainee_key}
+                rows.append({"teacher": 0, **who, "file": outcome.file, **row})
+                demo_rows += [{"teacher": 0, **who, **d} for d in extra]
         files.append(outcome)
-        if record is not None:
-            todo.append((outcome.file, record, experiment, settings))
-    fresh = set(memo.todo([item[0] for item in todo], "replay"))
-    replayed = pool.map(_replay, [item for item in todo if item[0] in fresh], meanwhile)
-    merged = memo.merge(
-        [item[0] for item in todo], "replay", {item[0]: item for item in replayed}
-    )
-    by_label = {item[0]: item[1:] for item in merged}
-    rows, demo_rows = [], []
-    for i, outcome in enumerate(files):
-        if not outcome.counted:
-            continue
-        kind, reason, row, extra = by_label[outcome.file]
-        if kind != "counted":
-            files[i] = replace(outcome, kind=kind, reason=reason)
-            continue
-        who = {"trainee": outcome.trainee, "trainee_key": outcome.trainee_key}
-        rows.append({"teacher": 0, **who, "file": outcome.file, **row})
-        demo_rows += [{"teacher": 0, **who, **d} for d in extra]
     order = list(EXPERIMENTS[experiment]["conditions"])
     runs, demos = pd.DataFrame(rows), pd.DataFrame(demo_rows)
     for frame in (runs, demos):
