@@ -255,7 +255,7 @@ def test_af_costs_what_bf_costs(task):
     assert (af.selector.name, af.k) == ("disagreement", 5)
     assert PickPlaceRun("AF", task, k=2).feedback_seconds == 50.0
     assert list(CONDITIONS) == ["NF", "RF", "BF", "SF"]  # the paper's four, unchanged
-    assert list(ALL_CONDITIONS) == ["NF", "RF", "BF", "SF", "AF"]
+    assert list(ALL_CONDITIONS) == ["NF", "RF", "BF", "SF", "AF", "HF"]
 
 
 @pytest.mark.parametrize("selector", ["random", "disagreement"])

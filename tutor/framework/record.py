@@ -10,7 +10,7 @@ an educator and read back by the class analysis. It holds:
   keeps the old one, so nothing a trainee did is ever deleted (:class:`Attempt`);
 - in each attempt the demonstration set :math:`b` in order (:class:`Demo`: the samples,
   the condition it was meant for, what the trainee asked to see (SF) or the selector
-  picked (AF), its cost on the Experiment 2 clock, whether it followed VR's rule), the
+  picked (AF), its cost on the Experiment 2 clock, whether it followed VR's rule or HF's hint), the
   robot tests asked for (:class:`Test`), other clock time and the finished flag;
 - every event in order (:class:`Event`: add, undo, load, reset, test, finish, ...), with a
   wall-clock stamp;
@@ -226,7 +226,9 @@ class Demo:
     seconds : float or None
         Experiment 2: what the demo cost on the clock (its duration).
     followed_rule : bool or None
-        VR: whether it followed the rule in force when it was given.
+        Whether it followed the advice in force when it was given: VR's rule
+        compliance (it started inside the rules' circle), or HF's hint following (it
+        went to the plant the next-demo hint named); None in the other conditions.
     chosen_by : str
         Simulated teachers: why this condition was chosen ("plan", "red", "rule 2", ...).
     mistake : str

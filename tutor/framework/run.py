@@ -275,8 +275,9 @@ class TeachingRun:
 
         ``condition`` is the test condition it was meant for (read off the demo when
         None); ``shown`` the conditions asked to see (SF); ``seconds`` its cost on the
-        clock; ``followed_rule`` VR's compliance; ``chosen_by`` and ``mistake`` notes on
-        why it was given and what went wrong on purpose (simulated teachers, the hand).
+        clock; ``followed_rule`` VR's rule compliance or HF's hint following;
+        ``chosen_by`` and ``mistake`` notes on why it was given and what went wrong on
+        purpose (simulated teachers, the hand).
 
         Raises
         ------

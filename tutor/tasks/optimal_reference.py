@@ -54,6 +54,11 @@ class OptimalReference:
         The highest eps any one bank demo reaches.
     greedy : tuple of float
         eps after each of the greedy teacher's demos.
+    picks : tuple of int
+        The condition (index into B^) of each of the greedy teacher's demos, in order:
+        the first is the best first demo (the next-demo hint with no demo yet).
+    n_conditions : int
+        |B^| of the task the reference was computed for (0: not stated).
     """
 
     task: str
@@ -65,6 +70,8 @@ class OptimalReference:
     best_pair: float
     best_single: float = 0.0
     greedy: tuple = ()
+    picks: tuple = ()
+    n_conditions: int = 0
 
     @property
     def coverage(self) -> float:
@@ -119,6 +126,8 @@ def _reference(name: str, entry) -> OptimalReference:
         best_pair = entry["pairs"]["best_efficacy"]
         best_single = float(entry["greedy"]["best_single"])
         path = tuple(float(e) for e in entry["greedy"]["efficacy"])
+        picks = tuple(_index(i, where) for i in entry["greedy"].get("indices", ()))
+        n_conditions = _index(entry.get("n_conditions", 0), where)
     except (KeyError, TypeError, IndexError, ValueError) as exc:
         raise InvalidFileError(
             f"the {where} is incomplete ({exc!r}); regenerate the file with "
@@ -126,9 +135,28 @@ def _reference(name: str, entry) -> OptimalReference:
         ) from exc
     if experiment not in RULES or not finite_number(best_pair):
         raise InvalidFileError(f"the {where} has an unknown experiment or a bad pair bound")
+    if n_conditions and any(i >= n_conditions for i in picks):
+        raise InvalidFileError(f"the {where} picks a condition beyond its {n_conditions}")
     return OptimalReference(
-        name, experiment, fewest, proven, efficacy, eta, float(best_pair), best_single, path
+        name,
+        experiment,
+        fewest,
+        proven,
+        efficacy,
+        eta,
+        float(best_pair),
+        best_single,
+        path,
+        picks,
+        n_conditions,
     )
+
+
+def _index(value, where: str) -> int:
+    """A whole number >= 0 of the reference (a condition's index, or how many there are)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise InvalidFileError(f"the {where} holds {value!r} where a whole number >= 0 belongs")
+    return value
 
 
 def load_references(path=None) -> dict[str, OptimalReference]:

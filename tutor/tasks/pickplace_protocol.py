@@ -11,6 +11,11 @@ Beyond the paper (its open question, choosing r automatically):
 AF  adaptive: after each demo the robot tries the k = 5 plants a selector picks from the
     demos and what the robot learnt (by default where the frames' regressions disagree
     most, or far from every demo: :mod:`tutor.framework.selectors`). Same cost as BF.
+HF  hint: NF (nothing shown while teaching, totals withheld) plus a next-demo hint,
+    the plant the robot would learn most from next by greedy lookahead
+    (:meth:`PickPlaceRun.hint`, :mod:`tutor.tasks.hint`). A hint costs no robot time,
+    so HF costs what NF costs; each demo records whether it went to the hinted plant
+    (``Demo.followed_rule``).
 
 The clock the paper's teachers lived by: a demonstration costs its own duration, every
 realisation the robot performs costs 25 s (a real arm is slow), and a teaching run is
@@ -32,6 +37,7 @@ import numpy as np
 from ..errors import InvalidParameterError
 from ..framework import RunOverError, TeachingRun
 from ..framework.record import utc_now
+from .hint import Hint, next_demo_hint
 from .kinesthetic import CARRY_SECONDS, PAUSE_SECONDS, REACH_SECONDS
 from .pickplace import PickPlaceTask
 
@@ -40,6 +46,8 @@ __all__ = [
     "ALL_CONDITIONS",
     "CONDITIONS",
     "EXTRA_CONDITIONS",
+    "HINTED",
+    "Hint",
     "PickPlaceRun",
     "RunOverError",
     "RUNS",
@@ -49,11 +57,13 @@ __all__ = [
 #: the paper's four conditions (condition -> feedback mode), in the paper's order
 CONDITIONS = {"NF": "none", "RF": "replay", "BF": "batch", "SF": "selected"}
 #: conditions beyond the paper (offered as extras, never by default)
-EXTRA_CONDITIONS = {"AF": "adaptive"}
+EXTRA_CONDITIONS = {"AF": "adaptive", "HF": "none"}
 #: every condition a run can be in
 ALL_CONDITIONS = {**CONDITIONS, **EXTRA_CONDITIONS}
 #: the adaptive conditions' selector and k (k = 5 plants: BF's cost)
 ADAPTIVE = {"AF": ("disagreement", 5)}
+#: the conditions that show the next-demo hint (:meth:`PickPlaceRun.hint`)
+HINTED = ("HF",)
 #: each trainee teaches three runs in their condition
 RUNS = 3
 #: The shortest demonstration a person gives (s): the simulated hand's fastest pace
@@ -79,7 +89,8 @@ class PickPlaceRun(TeachingRun):
 
     An AF run takes ``selector=``, ``k=`` and ``rng=`` (the random selectors'
     generator) besides the record options; by default AF shows 5 plants picked by
-    frame disagreement (:data:`ADAPTIVE`).
+    frame disagreement (:data:`ADAPTIVE`). An HF run (:data:`HINTED`) offers
+    :meth:`hint` before each demo.
     """
 
     experiment = 2
@@ -207,10 +218,39 @@ class PickPlaceRun(TeachingRun):
             )
         return super().add_demo(raw, seconds=seconds, **options)
 
+    # ---------------------------------------------------------------- the hint (HF)
+
+    @property
+    def hinted(self) -> bool:
+        """Whether this run's condition shows the next-demo hint (HF)."""
+        return self.condition in HINTED
+
+    def _hint_key(self) -> tuple[int, int, int]:
+        """What the hint depends on: the attempt, the demos taken back, the demos."""
+        return (len(self.record.attempts), len(self.attempt.undone), self.session.n_demos)
+
+    def hint(self) -> Hint:
+        """Where the robot would learn most from next (:func:`tutor.tasks.hint.next_demo_hint`).
+
+        The plant whose careful demo raises eps the most, by greedy lookahead over a
+        pruned candidate set (the optimal teacher's first pick before any demo). It is
+        kept until the demos change (a demo, Undo, Reset, Load), and costs no time on
+        the clock. Any condition may ask; only HF shows it to the trainee.
+        """
+        key = self._hint_key()
+        cached = getattr(self, "_hint", None)
+        if cached is None or cached[0] != key:
+            cached = (key, next_demo_hint(self.task, self.session))
+            self._hint = cached
+        return cached[1]
+
     # ---------------------------------------------------------------- teaching
 
     def demonstrate(self, plant: int, raw=None, mistake=None, rng=None, chosen_by: str = ""):
         """Give one demonstration to ``plant`` (recorded, or generated kinesthetically).
+
+        In HF it records whether ``plant`` is the hinted one (``Demo.followed_rule``);
+        a demo added with :meth:`add_demo` (e.g. loaded from a file) records nothing.
 
         Raises
         ------
@@ -225,10 +265,12 @@ class PickPlaceRun(TeachingRun):
         if raw is None:
             raw = self.task.demonstrate(plant, rng, mistake=mistake)
         seconds = self.task.duration(raw)
+        followed = plant == self.hint().plant if self.hinted else None
         return self.add_demo(
             raw,
             condition=self.task.conditions[plant],
             seconds=seconds,
+            followed_rule=followed,
             chosen_by=chosen_by,
             mistake=mistake or "",
         )

@@ -1,4 +1,4 @@
-"""Simulated teachers of Experiment 2 (pick-and-place): NF, RF, BF and SF (and AF).
+"""Simulated teachers of Experiment 2 (pick-and-place): NF, RF, BF and SF (and AF, HF).
 
 One :class:`PickPlaceTeacher` (one person's traits) teaches three runs of
 :class:`~tutor.tasks.pickplace_protocol.PickPlaceRun` in their condition. The condition
@@ -18,6 +18,11 @@ SF  they ask the robot to try plants now and then (25 s each), choosing as novic
 AF  (beyond the paper) the robot tries the k plants a selector picks after every demo
     (25 s each): they read them exactly as BF's five (same belief, same aiming at a
     failing one, same traits); only which plants are shown differs.
+HF  (beyond the paper) nothing is shown, as in NF, but before each demo the tutor
+    names the plant the robot would learn most from next (:meth:`PickPlaceRun.hint`):
+    with chance ``compliance`` they demonstrate it, otherwise the plant they would
+    have chosen in NF. They stop as in NF (their prior; nothing shown) and test a few
+    plants after the run as NF does.
 
 Between runs a teacher remembers the plants they saw the robot fail at (during the
 run, or for NF in the tests they choose after it) and starts the next run's plan there.
@@ -34,13 +39,13 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..tasks.pickplace import PickPlaceTask
-from ..tasks.pickplace_protocol import ALL_CONDITIONS, CONDITIONS, PickPlaceRun
+from ..tasks.pickplace_protocol import ALL_CONDITIONS, CONDITIONS, HINTED, PickPlaceRun
 from .model import SIMULATED, TeacherModel, simulated_clock
 from .traits import TeacherTraits
 
 __all__ = ["PickPlaceTeacher", "PICKPLACE_CONDITIONS", "NOVICE_TEST_NEAR", "MAX_RETRIES"]
 
-#: the paper's four conditions (AF, beyond the paper, is in ALL_CONDITIONS)
+#: the paper's four conditions (AF and HF, beyond the paper, are in ALL_CONDITIONS)
 PICKPLACE_CONDITIONS = tuple(CONDITIONS)
 #: SF: share of a novice's test choices that are a demonstrated plant or its neighbour
 NOVICE_TEST_NEAR = 0.8
@@ -91,10 +96,15 @@ class PickPlaceTeacher:
         random selectors draw from a generator spawned from ``rng`` (the teacher's own
         draws are unchanged by it).
 
+        HF: before each demo the teacher asks ``run.hint()`` and follows it with chance
+        ``traits.compliance`` (one draw from ``rng``); a hinted demo's ``chosen_by`` is
+        "hint", and every HF demo's ``followed_rule`` says whether it went to the hinted
+        plant.
+
         Its record tells the story: each demo's ``chosen_by`` (why the plant was chosen:
-        "plan", "red", "retry") and ``mistake`` ("wrong_plant" when the hand slipped), the
-        undo events (retries) and the attempt's ``stopped`` ("satisfied", "patience" or
-        "time").
+        "plan", "red", "retry", "hint") and ``mistake`` ("wrong_plant" when the hand
+        slipped), the undo events (retries) and the attempt's ``stopped`` ("satisfied",
+        "patience" or "time").
         """
         if condition not in ALL_CONDITIONS:
             raise InvalidParameterError(
@@ -115,12 +125,15 @@ class PickPlaceTeacher:
             )
         model = self._model(rng)
         model.lessons = list(self.lessons)
+        hinted = condition in HINTED
         retry, tries = None, 0
         why_stopped = "time"
         while not run.finished:
             m = run.session.n_demos
             if retry is not None:
                 plant, why = retry, "retry"
+            elif hinted and rng.random() < t.compliance:
+                plant, why = run.hint().plant, "hint"
             else:
                 point, why = model.next_target(avoid=np.flatnonzero(model.belief.demonstrated))
                 plant = model.nearest(point)
@@ -156,8 +169,8 @@ class PickPlaceTeacher:
                 why_stopped = "patience"
                 break
         run.finish(why_stopped)
-        if condition == "NF" and run.session.n_demos:
-            # NF: self-chosen realisations only after the run (chosen as novices do)
+        if ALL_CONDITIONS[condition] == "none" and run.session.n_demos:
+            # NF (and HF): self-chosen realisations only after the run, as novices do
             self._self_test(run, model, rng, always=True)
         self.lessons = list(model.belief.failures_seen)
         return run

@@ -84,6 +84,10 @@ class TeacherTraits:
     repeat_rate : float
         Chance that a demo from their own plan deliberately repeats one they already
         gave ("showing it again helps"): the paper's ambiguous demonstrations.
+    compliance : float
+        Chance that they demonstrate the plant the next-demo hint names (HF, beyond the
+        paper) instead of one of their own choosing. Used only in HF. A teacher made by
+        hand rather than drawn from a :class:`Population` follows half the hints.
     """
 
     enough_maze: int
@@ -102,6 +106,7 @@ class TeacherTraits:
     test_rate: float
     notice_rate: float
     repeat_rate: float
+    compliance: float = 0.5
 
     def _for(self, trait: str, task: str):
         if task not in TASKS:
@@ -212,6 +217,13 @@ class Population:
     repeat_a, repeat_b
         ``repeat_rate`` ~ beta(a, b), mean 0.15: the paper counts ambiguous demos
         (demos that add nothing, e.g. co-located ones) in every condition.
+    compliance_low, compliance_high
+        ``compliance`` ~ uniform (mean 0.7), drawn last so that every other trait of a
+        teacher is the same draw as before the trait existed. The paper has no hint
+        condition and measures nothing like it; our judgement of novices told "the
+        robot would learn most from this plant next" is that most follow it most of
+        the time and some prefer their own plan. The adaptive study sets it to 0.5 and
+        1 instead (``dataclasses.replace``) to bracket the effect.
     """
 
     enough_median_maze: float = 4.0
@@ -242,6 +254,8 @@ class Population:
     notice_high: float = 1.0
     repeat_a: float = 1.5
     repeat_b: float = 8.5
+    compliance_low: float = 0.4
+    compliance_high: float = 1.0
 
     def __post_init__(self):
         lo, hi = self.enough_range
@@ -270,13 +284,18 @@ class Population:
                 "need 0 <= notice_low <= notice_high <= 1",
             ),
             (self.repeat_a > 0 and self.repeat_b > 0, "repeat_a and repeat_b must be > 0"),
+            (
+                0 <= self.compliance_low <= self.compliance_high <= 1,
+                "need 0 <= compliance_low <= compliance_high <= 1",
+            ),
         ]
         for ok, message in checks:
             if not ok:
                 raise InvalidParameterError(f"Population: {message}")
 
     def sample(self, rng) -> TeacherTraits:
-        """Draw one teacher (uses ``rng``, a numpy Generator, in a fixed order)."""
+        """Draw one teacher (uses ``rng``, a numpy Generator, in a fixed order; the
+        traits are drawn in the order of :class:`TeacherTraits`' fields)."""
         rng = np.random.default_rng(rng)
         lo, hi = self.enough_range
         z = rng.lognormal(0, self.enough_sigma)
@@ -301,6 +320,8 @@ class Population:
             test_rate=float(rng.uniform(self.test_low, self.test_high)),
             notice_rate=float(rng.uniform(self.notice_low, self.notice_high)),
             repeat_rate=float(rng.beta(self.repeat_a, self.repeat_b)),
+            # last: the draws of every trait above are those of a population without it
+            compliance=float(rng.uniform(self.compliance_low, self.compliance_high)),
         )
 
     def to_dict(self) -> dict:
