@@ -204,9 +204,10 @@ def adaptive_command(args) -> None:
     plan = adaptive_plan(args)
     check_out_dir(args.out)
     from .study.adaptive import run_study
-    from .study.adaptive_report import analyse_study, format_study_report, save_study
+    from .study.adaptive_report import analyse_study, format_study_report, save_raw, save_study
 
     result = run_study(plan, workers=args.workers, progress=not args.no_progress)
+    save_raw(result, args.out)  # the simulation is kept even if the analysis fails
     analysis = analyse_study(result)
     print(format_study_report(result, analysis))
     paths = save_study(result, analysis, args.out, figures=not args.no_figures)

@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -171,6 +172,8 @@ VARIANTS: dict[str, Population] = {
 }
 #: the main study's population
 DEFAULT_VARIANT = "default"
+#: teachers per seed in the HF arms (see StudyPlan.hf_teachers)
+HF_TEACHERS = 12
 
 
 def policy_available(policy: Policy) -> bool:
@@ -207,11 +210,20 @@ class StudyPlan:
     variants : tuple of str
         Teacher-model variants (keys of :data:`VARIANTS`) for the robustness check.
     variant_seeds : int
-        Seeds per variant (0: no robustness check).
+        Seeds per variant (0: no robustness check; default 1, so that the study fits
+        the session's time: the replication rates then rest on resampled cohorts).
     variant_policies : tuple of str
         The arms rerun under each variant (BF must be one).
     n_boot : int
         Bootstrap draws of every CI and replication rate.
+    hf_teachers : int or None
+        The HF arms teach only teachers 0 .. hf_teachers - 1 of each seed (None: all).
+        The hint's lookahead makes an HF run about 4 times as long as another (1.0-1.3
+        s against 0.3 s on one core of the shared machine), so all 36 teachers in both
+        HF arms would add about 22 minutes on two cores; their deltas are paired with
+        BF on the same teachers.
+    quick : bool
+        The test switch's plan (smaller sizes allowed; not a result).
     """
 
     n: int = 36
@@ -219,9 +231,10 @@ class StudyPlan:
     seeds: int = 10
     policies: tuple = DEFAULT_POLICIES
     variants: tuple = tuple(VARIANTS)
-    variant_seeds: int = 2
+    variant_seeds: int = 1
     variant_policies: tuple = ROBUSTNESS_POLICIES
     n_boot: int = 2000
+    hf_teachers: int | None = HF_TEACHERS
     quick: bool = False
 
     def to_dict(self) -> dict:
@@ -232,7 +245,7 @@ class StudyPlan:
 #: seed (a check that everything runs and is written, not a result)
 QUICK = StudyPlan(
     n=4, runs=1, seeds=2, variants=("less patient",), variant_seeds=1,
-    variant_policies=("BF", "KC2"), n_boot=200, quick=True,
+    variant_policies=("BF", "KC2"), n_boot=200, hf_teachers=2, quick=True,
 )
 
 
@@ -289,6 +302,8 @@ def check_plan(plan: StudyPlan) -> StudyPlan:
         variant_seeds=_whole(plan.variant_seeds, "variant_seeds", 0, 1000),
         variant_policies=available_policies(variant_policies),
         n_boot=_whole(plan.n_boot, "n_boot", 100, 100_000),
+        hf_teachers=None if plan.hf_teachers is None
+        else _whole(plan.hf_teachers, "hf_teachers", 2, n),
     )
 
 
@@ -369,7 +384,9 @@ def teach_policy(
     rows : list of dict
         One per run: the cohort's columns (:func:`tutor.study.cohort.rows_of`) plus
         ``final_reached`` (eps >= 0.9 at the end), ``robot_seconds``, ``realisations``,
-        ``demo_seconds`` (mean duration of the demos kept) and the teacher's traits.
+        ``demo_seconds`` (mean duration of the demos kept), ``compute_seconds`` (this
+        machine's time to simulate the run: the only column that is not reproducible)
+        and the teacher's traits.
     curve : list of dict
         One per demo and per demo taken back: ``step``, ``event``, ``seconds`` (clock
         used after it), ``efficacy`` and ``n_demos`` then.
@@ -384,7 +401,9 @@ def teach_policy(
     rows, curve = [], []
     for number in range(1, runs + 1):
         rng = _rng(seed, EXPERIMENT, teacher, number)
+        started = time.perf_counter()
         run = model.teach(policy.condition, rng, run=_new_run(policy, task, rng))
+        compute = time.perf_counter() - started
         base = {"seed": seed, "teacher": teacher, "policy": policy.name, "run": number}
         row, _ = rows_of(run, {**base, "condition": run.condition}, settings)
         demos = [d.seconds for d in run.attempt.demos if d.seconds is not None]
@@ -393,6 +412,7 @@ def teach_policy(
             robot_seconds=run.robot_seconds,
             realisations=int(round(run.robot_seconds / run.realisation_seconds)),
             demo_seconds=float(np.mean(demos)) if demos else np.nan,
+            compute_seconds=compute,
         )
         rows.append({**row, **trait_cols})
         for step, (event, seconds, eps, n_demos) in enumerate(run.trace, start=1):
@@ -454,18 +474,22 @@ class StudyResult:
 
 def jobs_of(plan: StudyPlan, settings: StudySettings = SETTINGS) -> list[tuple]:
     """Every unit of work of a (checked) plan: one teacher's runs in one arm."""
+    def teachers(policy: str) -> range:
+        hinted = POLICIES[policy].condition == "HF" and plan.hf_teachers is not None
+        return range(plan.hf_teachers if hinted else plan.n)
+
     jobs = [
         (DEFAULT_VARIANT, s, t, p, plan.runs, settings)
         for s in range(plan.seeds)
-        for t in range(plan.n)
         for p in plan.policies
+        for t in teachers(p)
     ]
     jobs += [
         (v, s, t, p, plan.runs, settings)
         for v in plan.variants
         for s in range(plan.variant_seeds)
-        for t in range(plan.n)
         for p in plan.variant_policies
+        for t in teachers(p)
     ]
     return jobs
 
@@ -486,15 +510,15 @@ def run_study(
     InvalidParameterError
         A bad plan (:func:`check_plan`) or ``workers``.
     """
-    import time
-
     asked = tuple(dict.fromkeys((*plan.policies, *plan.variant_policies)))
     plan = check_plan(plan)
     missing = tuple(p for p in asked if p not in (*plan.policies, *plan.variant_policies))
     if workers is None:
         workers = os.cpu_count() or 1
     workers = _whole(workers, "workers", 1, 256)
-    jobs = jobs_of(plan, settings)
+    order = [job[:4] for job in jobs_of(plan, settings)]
+    # the slow HF jobs first, so that the cores finish together
+    jobs = sorted(jobs_of(plan, settings), key=lambda j: POLICIES[j[3]].condition != "HF")
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -524,7 +548,6 @@ def run_study(
         if bar is not None:
             bar.close()
     seconds = time.perf_counter() - started
-    order = [job[:4] for job in jobs]
     runs = pd.DataFrame([r for key in order for r in done[key][0]])
     curves = pd.DataFrame([r for key in order for r in done[key][1]])
     front = ["variant", "seed", "teacher", "policy", "run"]

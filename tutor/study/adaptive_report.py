@@ -9,6 +9,7 @@ why: demos per run, robot time, undemonstrated plants, why runs stopped);
 =========================== ==========================================================
 ``adaptive_runs.csv``       one row per variant, seed, teacher, policy and run
 ``adaptive_curves.csv``     eps and the clock after every demo (and demo taken back)
+``adaptive_plan.json``      the plan as run (:func:`load_study` reads the three back)
 ``adaptive_summary.json``   the plan, every table and the headline numbers
 ``adaptive_report.txt``     the report
 ``adaptive_figure.png``     (a) eps against seconds used, (b) delta-eps against k,
@@ -30,6 +31,9 @@ from .adaptive import BASELINE, POLICIES, StudyResult
 from .report import check_out_dir
 
 __all__ = [
+    "PLAN_FORMAT",
+    "load_study",
+    "save_raw",
     "analyse_study",
     "format_study_report",
     "study_figure",
@@ -37,6 +41,10 @@ __all__ = [
     "paper_bf_undemonstrated_per_run",
     "optimal_curve",
 ]
+
+
+#: the ``format`` of ``adaptive_plan.json``
+PLAN_FORMAT = "lfd-tutor-adaptive-study"
 
 
 def paper_bf_undemonstrated_per_run() -> float:
@@ -185,6 +193,13 @@ def format_study_report(result: StudyResult, analysis: dict) -> str:
         lines.append(
             f"NOT RUN: {', '.join(result.missing)} (this tutor has no HF condition or no "
             "compliance trait yet: the next-demo hint's arms are missing from this study)"
+        )
+    hinted = [p for p in plan.policies if POLICIES[p].condition == "HF"]
+    if hinted and plan.hf_teachers is not None and plan.hf_teachers < plan.n:
+        lines.append(
+            f"{', '.join(hinted)}: teachers 0-{plan.hf_teachers - 1} of each seed only (the "
+            "hint's lookahead makes an HF run about 4 times as long); their deltas are "
+            "paired with BF on those teachers, their per-policy rows are means over them"
         )
     lines += ["", "Per policy (means over all runs; eps CI: t across the seeds' means)", ""]
     lines += _policy_lines(analysis["policies"])
@@ -339,8 +354,9 @@ def study_figure(result: StudyResult, analysis: dict):
     return fig
 
 
-def save_study(result: StudyResult, analysis: dict, out, figures: bool = True) -> dict:
-    """Write the study's files (the module docstring) into ``out``; returns their paths.
+def save_raw(result: StudyResult, out) -> dict:
+    """Write the simulation itself (``adaptive_runs.csv``, ``adaptive_curves.csv`` and
+    ``adaptive_plan.json``), before any analysis; :func:`load_study` reads them back.
 
     Raises
     ------
@@ -351,9 +367,69 @@ def save_study(result: StudyResult, analysis: dict, out, figures: bool = True) -
     paths = {
         "runs": out / "adaptive_runs.csv",
         "curves": out / "adaptive_curves.csv",
-        "summary": out / "adaptive_summary.json",
-        "report": out / "adaptive_report.txt",
+        "plan": out / "adaptive_plan.json",
     }
+    plan = {
+        "format": PLAN_FORMAT,
+        "plan": result.plan.to_dict(),
+        "missing": list(result.missing),
+        "simulation_seconds": result.seconds,
+    }
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        result.runs.to_csv(paths["runs"], index=False)
+        result.curves.to_csv(paths["curves"], index=False)
+        paths["plan"].write_text(json.dumps(_plain(plan), indent=2))
+    except OSError as exc:
+        raise SaveError(f"cannot write the study's files in {out}: {exc.strerror or exc}") from exc
+    return paths
+
+
+def load_study(folder) -> StudyResult:
+    """A study written by :func:`save_raw` (or ``lfd-tutor adaptive --out folder``).
+
+    Raises
+    ------
+    InvalidFileError
+        A file is missing or is not the study's.
+    """
+    import dataclasses
+    from pathlib import Path
+
+    from ..errors import InvalidFileError
+    from ..fileio import read_json
+    from .adaptive import StudyPlan
+
+    folder = Path(folder)
+    data = read_json(folder / "adaptive_plan.json", "adaptive study's plan")
+    if not isinstance(data, dict) or data.get("format") != PLAN_FORMAT:
+        raise InvalidFileError(
+            f"{folder / 'adaptive_plan.json'} is not an adaptive study's plan ({PLAN_FORMAT}); "
+            "write one with lfd-tutor adaptive --out FOLDER"
+        )
+    try:
+        fields = {f.name for f in dataclasses.fields(StudyPlan)}
+        raw = {k: tuple(v) if isinstance(v, list) else v for k, v in data["plan"].items()}
+        plan = StudyPlan(**{k: v for k, v in raw.items() if k in fields})
+        frames = [pd.read_csv(folder / name) for name in ("adaptive_runs.csv",
+                                                           "adaptive_curves.csv")]
+    except (KeyError, TypeError, OSError, ValueError) as exc:
+        raise InvalidFileError(f"the adaptive study in {folder} cannot be read: {exc}") from exc
+    return StudyResult(plan, frames[0], frames[1], tuple(data.get("missing", ())),
+                       float(data.get("simulation_seconds", 0.0)))
+
+
+def save_study(result: StudyResult, analysis: dict, out, figures: bool = True) -> dict:
+    """Write the study's files (the module docstring) into ``out``; returns their paths.
+
+    Raises
+    ------
+    SaveError
+        ``out`` cannot be made or written.
+    """
+    paths = save_raw(result, out)
+    out = paths["runs"].parent
+    paths.update(summary=out / "adaptive_summary.json", report=out / "adaptive_report.txt")
     report = format_study_report(result, analysis)
     headline = {
         name: {
@@ -380,9 +456,6 @@ def save_study(result: StudyResult, analysis: dict, out, figures: bool = True) -
         "paper_bf_undemonstrated_per_run": analysis["paper_bf_undemonstrated_per_run"],
     }
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        result.runs.to_csv(paths["runs"], index=False)
-        result.curves.to_csv(paths["curves"], index=False)
         paths["summary"].write_text(json.dumps(_plain(summary), indent=2, default=str))
         paths["report"].write_text(report + "\n")
         if figures:
