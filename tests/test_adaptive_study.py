@@ -19,9 +19,12 @@ from tutor.study import adaptive_stats as st
 from tutor.study.adaptive import (
     POLICIES,
     QUICK,
+    SETTINGS,
     StudyPlan,
+    _Checkpoint,
     available_policies,
     check_plan,
+    run_study,
     teach_policy,
 )
 from tutor.study.adaptive_report import load_study, paper_bf_undemonstrated_per_run
@@ -232,3 +235,23 @@ def test_mean_curve_is_each_runs_latest_efficacy():
 
 def test_papers_bf_undemonstrated_per_run():
     assert paper_bf_undemonstrated_per_run() == pytest.approx(827 / 27)
+
+
+def test_an_interrupted_study_resumes_from_its_checkpoint(tmp_path):
+    plan = dataclasses.replace(
+        QUICK, n=2, policies=("BF", "KC2"), variants=(), variant_seeds=0, hf_teachers=None
+    )
+    path = tmp_path / "partial.jsonl"
+    first = run_study(plan, workers=1, progress=False, checkpoint=path)
+    lines = path.read_text().splitlines()
+    assert len(lines) == 1 + 2 * 2 * 2  # the plan, then seeds x teachers x arms
+    path.write_text("\n".join(lines[:4]) + "\n" + lines[4][:40])  # killed mid-line
+    again = run_study(plan, workers=1, progress=False, checkpoint=path)
+    assert again.resumed == 3
+    drop = ["compute_seconds"]
+    pd.testing.assert_frame_equal(first.runs.drop(columns=drop), again.runs.drop(columns=drop))
+    pd.testing.assert_frame_equal(first.curves, again.curves)
+    other = dataclasses.replace(plan, seeds=3)  # another plan starts over
+    checkpoint = _Checkpoint(path, check_plan(other), SETTINGS)
+    checkpoint.close()
+    assert checkpoint.done == {} and len(path.read_text().splitlines()) == 1

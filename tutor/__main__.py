@@ -202,15 +202,20 @@ def adaptive_command(args) -> None:
     from .study.report import check_out_dir
 
     plan = adaptive_plan(args)
-    check_out_dir(args.out)
+    check_out_dir(args.out)  # before any work: nothing is made yet
     from .study.adaptive import run_study
     from .study.adaptive_report import analyse_study, format_study_report, save_raw, save_study
 
-    result = run_study(plan, workers=args.workers, progress=not args.no_progress)
-    save_raw(result, args.out)  # the simulation is kept even if the analysis fails
+    out = check_out_dir(args.out)
+    partial = out / "adaptive_partial.jsonl"  # an interrupted study resumes from it
+    result = run_study(
+        plan, workers=args.workers, progress=not args.no_progress, checkpoint=partial
+    )
+    save_raw(result, out)  # the simulation is kept even if the analysis fails
     analysis = analyse_study(result)
     print(format_study_report(result, analysis))
-    paths = save_study(result, analysis, args.out, figures=not args.no_figures)
+    paths = save_study(result, analysis, out, figures=not args.no_figures)
+    partial.unlink(missing_ok=True)
     print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
 
 

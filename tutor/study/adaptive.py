@@ -456,7 +456,10 @@ class StudyResult:
     missing : tuple of str
         Arms asked for that this tutor cannot teach (e.g. HF before it lands).
     seconds : float
-        Wall time of the simulation.
+        Wall time of the simulation (of this call, when it resumed a checkpoint).
+    settings : StudySettings
+    resumed : int
+        Jobs (one teacher's runs in one arm) read back from a checkpoint.
     """
 
     plan: StudyPlan
@@ -465,6 +468,7 @@ class StudyResult:
     missing: tuple = ()
     seconds: float = 0.0
     settings: StudySettings = SETTINGS
+    resumed: int = 0
 
     @property
     def main(self) -> pd.DataFrame:
@@ -494,16 +498,75 @@ def jobs_of(plan: StudyPlan, settings: StudySettings = SETTINGS) -> list[tuple]:
     return jobs
 
 
+def _python(value):
+    """numpy scalars as Python numbers (for JSON)."""
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"cannot write {type(value).__name__} to a checkpoint")
+
+
+class _Checkpoint:
+    """Finished jobs appended to a JSON-lines file as they come, so an interrupted study
+    resumes where it stopped (the first line names the plan; another plan starts over)."""
+
+    def __init__(self, path, plan: StudyPlan, settings: StudySettings):
+        import json
+        from pathlib import Path
+
+        self.path = Path(path)
+        self.head = {"plan": plan.to_dict(), "settings": dataclasses.asdict(settings)}
+        self.head = json.loads(json.dumps(self.head))  # tuples as lists, as read back
+        self.done: dict = {}
+        if self.path.is_file():
+            lines = self.path.read_text().splitlines()
+            try:
+                same = bool(lines) and json.loads(lines[0]) == self.head
+                if same:
+                    for line in lines[1:]:
+                        item = json.loads(line)
+                        self.done[tuple(item["key"])] = (item["rows"], item["curve"])
+            except (ValueError, KeyError, TypeError):  # a torn last line: keep what parsed
+                same = bool(self.done)
+            if not same:
+                self.done = {}
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.file = self.path.open("w")
+        self.file.write(json.dumps(self.head) + "\n")
+        for key, (rows, curve) in self.done.items():
+            self._write(key, rows, curve)
+
+    def _write(self, key, rows, curve) -> None:
+        import json
+
+        item = {"key": list(key), "rows": rows, "curve": curve}
+        self.file.write(json.dumps(item, default=_python) + "\n")
+        self.file.flush()
+
+    def add(self, key, rows, curve) -> None:
+        self.done[key] = (rows, curve)
+        self._write(key, rows, curve)
+
+    def close(self) -> None:
+        self.file.close()
+
+
 def run_study(
     plan: StudyPlan = StudyPlan(),
     workers: int | None = None,
     progress: bool | Callable = True,
     settings: StudySettings = SETTINGS,
+    checkpoint=None,
 ) -> StudyResult:
     """Simulate the study on ``workers`` processes (default: every core).
 
-    The numbers depend on the plan and the seeds only, not on ``workers`` or the order
-    the work is done in.
+    The numbers depend on the plan and the seeds only, not on ``workers``, the order
+    the work is done in, or a resumed ``checkpoint``.
+
+    Parameters
+    ----------
+    checkpoint : path, optional
+        A JSON-lines file each finished job is appended to; a study interrupted with the
+        same plan resumes from it (its jobs are not simulated again).
 
     Raises
     ------
@@ -517,40 +580,52 @@ def run_study(
         workers = os.cpu_count() or 1
     workers = _whole(workers, "workers", 1, 256)
     order = [job[:4] for job in jobs_of(plan, settings)]
-    # the slow HF jobs first, so that the cores finish together
-    jobs = sorted(jobs_of(plan, settings), key=lambda j: POLICIES[j[3]].condition != "HF")
+    saved = None if checkpoint is None else _Checkpoint(checkpoint, plan, settings)
+    done = {} if saved is None else saved.done
+    resumed = len(done)
+    # the main study seed by seed (an interrupted one has whole seeds), the variants
+    # last; within a seed the slow HF jobs first, so that the cores finish together
+    jobs = sorted(
+        (j for j in jobs_of(plan, settings) if j[:4] not in done),
+        key=lambda j: (j[0] != DEFAULT_VARIANT, j[1], POLICIES[j[3]].condition != "HF"),
+    )
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
         tqdm.monitor_interval = 0
-        bar = tqdm(total=len(jobs), desc="adaptive study", unit="teacher-arm")
+        bar = tqdm(total=len(order), initial=resumed, desc="adaptive study", unit="teacher-arm")
     started = time.perf_counter()
-    done = {}
+
+    def keep(key, rows, curve):
+        if saved is None:
+            done[key] = (rows, curve)
+        else:
+            saved.add(key, rows, curve)
+        if bar is not None:
+            bar.update(1)
+
     try:
-        if workers == 1:
+        if workers == 1 or not jobs:
             _limit_threads()
             for job in jobs:
-                key, rows, curve = _job(job)
-                done[key] = (rows, curve)
-                if bar is not None:
-                    bar.update(1)
+                keep(*_job(job))
         else:
             import multiprocessing as mp
 
             ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
             with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
-                for key, rows, curve in pool.map(_job, jobs, chunksize=4):
-                    done[key] = (rows, curve)
-                    if bar is not None:
-                        bar.update(1)
+                for key, rows, curve in pool.map(_job, jobs, chunksize=2):
+                    keep(key, rows, curve)
     finally:
         if bar is not None:
             bar.close()
+        if saved is not None:
+            saved.close()
     seconds = time.perf_counter() - started
     runs = pd.DataFrame([r for key in order for r in done[key][0]])
     curves = pd.DataFrame([r for key in order for r in done[key][1]])
     front = ["variant", "seed", "teacher", "policy", "run"]
     runs = runs[front + [c for c in runs.columns if c not in front]]
     curves = curves[front + [c for c in curves.columns if c not in front]]
-    return StudyResult(plan, runs, curves, missing, seconds, settings)
+    return StudyResult(plan, runs, curves, missing, seconds, settings, resumed)

@@ -187,7 +187,8 @@ def format_study_report(result: StudyResult, analysis: dict) -> str:
         "random numbers (same traits and run generators in every policy), 15-minute clock, "
         "25 s per realisation" + (" [QUICK: a reduced test run, not a result]" if plan.quick
                                  else ""),
-        f"simulation wall time {result.seconds:.0f} s",
+        f"simulation wall time {result.seconds:.0f} s"
+        + (f" (and {result.resumed} jobs resumed from a checkpoint)" if result.resumed else ""),
     ]
     if result.missing:
         lines.append(
