@@ -81,7 +81,10 @@ def test_quick_runs_have_every_measure_and_curves_end_each_run(quick):
             == plan.n * plan.seeds * plan.runs).all()
     for column in (*st.MEASURES, "eta", "eta_target", "robot_seconds", "seconds"):
         assert runs[column].notna().all(), column
-    assert (runs.seconds <= 900 + 1e-6).all() and (runs.efficacy.between(0, 1)).all()
+    # a demo and the robot's attempts end by 15:00; the set-up before a demo that then
+    # does not fit may run past it (the teacher had started it)
+    assert (runs.seconds <= 900 + runs.trait_setup_seconds + 1e-6).all()
+    assert runs.efficacy.between(0, 1).all()
     # BF shows 5 plants a demo: at least 125 robot seconds a demo kept
     bf = main[main.policy == "BF"]
     assert (bf.robot_seconds >= 125 * bf.n_demos).all()
@@ -251,7 +254,12 @@ def test_an_interrupted_study_resumes_from_its_checkpoint(tmp_path):
     drop = ["compute_seconds"]
     pd.testing.assert_frame_equal(first.runs.drop(columns=drop), again.runs.drop(columns=drop))
     pd.testing.assert_frame_equal(first.curves, again.curves)
-    other = dataclasses.replace(plan, seeds=3)  # another plan starts over
-    checkpoint = _Checkpoint(path, check_plan(other), SETTINGS)
-    checkpoint.close()
-    assert checkpoint.done == {} and len(path.read_text().splitlines()) == 1
+    # a plan with other seeds keeps every job it shares; other runs per teacher start over
+    more = _Checkpoint(path, check_plan(dataclasses.replace(plan, seeds=3)), SETTINGS)
+    more.close()
+    same = _Checkpoint(path, check_plan(plan), SETTINGS)
+    same.close()
+    assert set(more.done) == set(same.done) and len(more.done) == 8
+    other = _Checkpoint(path, check_plan(dataclasses.replace(plan, runs=2)), SETTINGS)
+    other.close()
+    assert other.done == {} and len(path.read_text().splitlines()) == 1

@@ -75,6 +75,7 @@ __all__ = [
     "available_policies",
     "check_plan",
     "policy_available",
+    "is_secondary",
     "teach_policy",
     "run_study",
     "EXPERIMENT",
@@ -174,6 +175,14 @@ VARIANTS: dict[str, Population] = {
 DEFAULT_VARIANT = "default"
 #: teachers per seed in the HF arms (see StudyPlan.hf_teachers)
 HF_TEACHERS = 6
+#: seeds of the secondary arms (the oracle and HF; see StudyPlan.secondary_seeds)
+SECONDARY_SEEDS = 5
+
+
+def is_secondary(policy: str) -> bool:
+    """The oracle (reference only) and the HF arms: run on fewer seeds when the plan says."""
+    p = POLICIES[policy]
+    return p.reference or p.condition == "HF"
 
 
 def policy_available(policy: Policy) -> bool:
@@ -222,6 +231,11 @@ class StudyPlan:
         s against 0.2-0.4 s on one free core), so all 36 teachers in both HF arms would
         add about 22 minutes on two free cores to the main arms' 19; the default (6)
         adds about 4. Their deltas are paired with BF on the same teachers.
+    secondary_seeds : int or None
+        The oracle and the HF arms run on seeds 0 .. secondary_seeds - 1 only (None: all
+        seeds). Measured on the shared machine (load 6-10 from other work) the main arms
+        took about 2.4 s per teacher and arm, so 10 seeds of every arm did not fit the
+        session; the claims about the real selectors keep all 10 seeds.
     quick : bool
         The test switch's plan (smaller sizes allowed; not a result).
     """
@@ -235,6 +249,7 @@ class StudyPlan:
     variant_policies: tuple = ROBUSTNESS_POLICIES
     n_boot: int = 2000
     hf_teachers: int | None = HF_TEACHERS
+    secondary_seeds: int | None = SECONDARY_SEEDS
     quick: bool = False
 
     def to_dict(self) -> dict:
@@ -245,7 +260,8 @@ class StudyPlan:
 #: seed (a check that everything runs and is written, not a result)
 QUICK = StudyPlan(
     n=4, runs=1, seeds=2, variants=("less patient",), variant_seeds=1,
-    variant_policies=("BF", "KC2"), n_boot=200, hf_teachers=2, quick=True,
+    variant_policies=("BF", "KC2"), n_boot=200, hf_teachers=2, secondary_seeds=None,
+    quick=True,
 )
 
 
@@ -304,6 +320,8 @@ def check_plan(plan: StudyPlan) -> StudyPlan:
         n_boot=_whole(plan.n_boot, "n_boot", 100, 100_000),
         hf_teachers=None if plan.hf_teachers is None
         else _whole(plan.hf_teachers, "hf_teachers", 2, n),
+        secondary_seeds=None if plan.secondary_seeds is None
+        else _whole(plan.secondary_seeds, "secondary_seeds", 2, 1000),
     )
 
 
@@ -482,10 +500,14 @@ def jobs_of(plan: StudyPlan, settings: StudySettings = SETTINGS) -> list[tuple]:
         hinted = POLICIES[policy].condition == "HF" and plan.hf_teachers is not None
         return range(plan.hf_teachers if hinted else plan.n)
 
+    def seeds(policy: str) -> range:
+        few = is_secondary(policy) and plan.secondary_seeds is not None
+        return range(min(plan.secondary_seeds, plan.seeds) if few else plan.seeds)
+
     jobs = [
         (DEFAULT_VARIANT, s, t, p, plan.runs, settings)
-        for s in range(plan.seeds)
         for p in plan.policies
+        for s in seeds(p)
         for t in teachers(p)
     ]
     jobs += [
@@ -507,7 +529,13 @@ def _python(value):
 
 class _Checkpoint:
     """Finished jobs appended to a JSON-lines file as they come, so an interrupted study
-    resumes where it stopped (the first line names the plan; another plan starts over)."""
+    resumes where it stopped.
+
+    The first line names the plan and the settings. A job's numbers depend only on its
+    key (variant, seed, teacher, arm), the runs per teacher and the settings, so any plan
+    with the same runs and settings reuses every job it shares (e.g. ``--seeds 7`` after
+    an interrupted ``--seeds 10``); otherwise the file starts over.
+    """
 
     def __init__(self, path, plan: StudyPlan, settings: StudySettings):
         import json
@@ -520,7 +548,7 @@ class _Checkpoint:
         if self.path.is_file():
             lines = self.path.read_text().splitlines()
             try:
-                same = bool(lines) and json.loads(lines[0]) == self.head
+                same = bool(lines) and self._same(json.loads(lines[0]))
                 if same:
                     for line in lines[1:]:
                         item = json.loads(line)
@@ -530,10 +558,21 @@ class _Checkpoint:
             if not same:
                 self.done = {}
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.file = self.path.open("w")
+        fresh = self.path.with_name(self.path.name + ".new")  # replaced whole, never torn
+        self.file = fresh.open("w")
         self.file.write(json.dumps(self.head) + "\n")
         for key, (rows, curve) in self.done.items():
             self._write(key, rows, curve)
+        self.file.close()
+        os.replace(fresh, self.path)
+        self.file = self.path.open("a")
+
+    def _same(self, head) -> bool:
+        """Whether a checkpoint's jobs hold this plan's numbers (runs and settings)."""
+        mine = self.head
+        return head["plan"]["runs"] == mine["plan"]["runs"] and head["settings"] == mine[
+            "settings"
+        ]
 
     def _write(self, key, rows, curve) -> None:
         import json
@@ -583,11 +622,13 @@ def run_study(
     saved = None if checkpoint is None else _Checkpoint(checkpoint, plan, settings)
     done = {} if saved is None else saved.done
     resumed = len(done)
-    # the main study seed by seed (an interrupted one has whole seeds), the variants
-    # last; within a seed the slow HF jobs first, so that the cores finish together
+    # the main arms seed by seed (an interrupted study has whole seeds of them), then the
+    # secondary arms, the variants last; the slow HF jobs first among the secondary
     jobs = sorted(
         (j for j in jobs_of(plan, settings) if j[:4] not in done),
-        key=lambda j: (j[0] != DEFAULT_VARIANT, j[1], POLICIES[j[3]].condition != "HF"),
+        key=lambda j: (
+            j[0] != DEFAULT_VARIANT, is_secondary(j[3]), j[1], POLICIES[j[3]].condition != "HF"
+        ),
     )
     bar = None
     if progress:

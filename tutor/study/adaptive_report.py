@@ -27,7 +27,7 @@ import pandas as pd
 from .. import paper
 from ..errors import SaveError
 from . import adaptive_stats as st
-from .adaptive import BASELINE, POLICIES, StudyResult
+from .adaptive import BASELINE, POLICIES, StudyResult, is_secondary
 from .report import check_out_dir
 
 __all__ = [
@@ -157,8 +157,8 @@ def _claim(name: str, analysis: dict, seeds: int) -> str:
     ref = " (an oracle, for reference only)" if POLICIES[name].reference else ""
     text = (
         f"{name}{ref}: delta-eps vs BF = {_pts(d['mean'])} points, 95 % CI {_ci(d)} "
-        f"across {seeds} seeds (pooled bootstrap {_ci(d, 'pooled_low', 'pooled_high')}); "
-        f"its per-seed CI over teachers is above 0 in {int(d.seeds_above)} of {seeds} "
+        f"across {int(d.seeds)} seeds (pooled bootstrap {_ci(d, 'pooled_low', 'pooled_high')}); "
+        f"its per-seed CI over teachers is above 0 in {int(d.seeds_above)} of {int(d.seeds)} "
         f"seeds and below 0 in {int(d.seeds_below)}."
     )
     if d["low"] > 0:
@@ -201,6 +201,12 @@ def format_study_report(result: StudyResult, analysis: dict) -> str:
             f"{', '.join(hinted)}: teachers 0-{plan.hf_teachers - 1} of each seed only (the "
             "hint's lookahead makes an HF run about 4 times as long); their deltas are "
             "paired with BF on those teachers, their per-policy rows are means over them"
+        )
+    few = [p for p in plan.policies if is_secondary(p)]
+    if few and plan.secondary_seeds is not None and plan.secondary_seeds < seeds:
+        lines.append(
+            f"{', '.join(few)}: seeds 0-{plan.secondary_seeds - 1} only (the machine's time; "
+            f"the other arms have all {seeds}); their CIs are across those seeds"
         )
     lines += ["", "Per policy (means over all runs; eps CI: t across the seeds' means)", ""]
     lines += _policy_lines(analysis["policies"])
