@@ -80,6 +80,16 @@ def analyse_study(result: StudyResult) -> dict:
     for column in st.DELTA_MEASURES:
         seeds, overall = st.delta_table(main, column, plan.n_boot, 0, order)
         deltas[column], per_seed[column] = overall, seeds
+    # the selection itself, at the same k: each selector against random picks of as many
+    selection = {}
+    for control in [p for p in order if POLICIES[p].selector == "random"]:
+        k = POLICIES[control].k
+        same = [p for p in order if POLICIES[p].k == k and p != control
+                and not POLICIES[p].reference]
+        if same:
+            selection[control] = st.delta_table(
+                main, "efficacy", plan.n_boot, 0, same, baseline=control
+            )[1]
     curves = result.curves[result.curves.variant == "default"]
     from ..tasks.optimal_reference import optimal_reference
 
@@ -88,6 +98,7 @@ def analyse_study(result: StudyResult) -> dict:
         "policies": st.policy_table(main, order),
         "deltas": deltas,
         "per_seed": per_seed,
+        "selection": selection,
         "why_stopped": st.why_stopped(main, order),
         "replication": st.replication_table(result.runs, plan.n, plan.n_boot, 0),
         "curves": st.mean_curves(curves),
@@ -211,7 +222,10 @@ def format_study_report(result: StudyResult, analysis: dict) -> str:
     lines += ["", "Per policy (means over all runs; eps CI: t across the seeds' means)", ""]
     lines += _policy_lines(analysis["policies"])
     lines += ["", "Paired delta vs BF (same teacher, seed and run; a teacher's runs averaged)", ""]
-    head = f"{'policy':<7} {'measure':<15} {'mean':>8} {'95 % CI (seeds)':>20} {'seeds CI>0':>11}"
+    head = (
+        f"{'policy':<7} {'measure':<15} {'mean':>8} {'95 % CI (seeds)':>20} "
+        f"{'seeds CI>0':>11} {'CI<0':>5}"
+    )
     lines += [head, "-" * len(head)]
     for column in st.DELTA_MEASURES:
         table = analysis["deltas"][column]
@@ -220,12 +234,22 @@ def format_study_report(result: StudyResult, analysis: dict) -> str:
         for name, d in table.iterrows():
             lines.append(
                 f"{name:<7} {column:<15} {fmt(d['mean']):>8} {_ci(d, fmt=fmt):>20} "
-                f"{int(d.seeds_above):>5} / {int(d.seeds)}"
+                f"{int(d.seeds_above):>5} / {int(d.seeds)} {int(d.seeds_below):>5}"
             )
     lines += ["", "(efficacy and reached_target in percentage points)", ""]
     lines += ["Claims (delta-eps at 900 s against BF)", ""]
     for name in analysis["deltas"]["efficacy"].index:
         lines.append("- " + _claim(name, analysis, seeds))
+    for control, table in analysis["selection"].items():
+        k = POLICIES[control].k
+        lines += ["", f"The choice itself at k = {k}: delta-eps against {control} (as many plants "
+                  "shown, chosen at random; same teachers)", ""]
+        for name, d in table.iterrows():
+            lines.append(
+                f"* {name} vs {control}: {_pts(d['mean'])} points, 95 % CI {_ci(d)} across "
+                f"{int(d.seeds)} seeds; CI above 0 in {int(d.seeds_above)}, below 0 in "
+                f"{int(d.seeds_below)} of the seeds"
+            )
     lines += ["", "Per-seed delta-eps vs BF (points; bootstrap CI over teachers)", ""]
     per = analysis["per_seed"]["efficacy"]
     for name, group in per.groupby("policy", sort=False):
@@ -456,6 +480,7 @@ def save_study(result: StudyResult, analysis: dict, out, figures: bool = True) -
         "headline": headline,
         "policies": analysis["policies"],
         "deltas": analysis["deltas"],
+        "selection": analysis["selection"],
         "per_seed": {k: v.to_dict(orient="records") for k, v in analysis["per_seed"].items()},
         "why_stopped": analysis["why_stopped"],
         "replication": analysis["replication"].to_dict(orient="records"),
