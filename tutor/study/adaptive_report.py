@@ -405,6 +405,7 @@ def save_raw(result: StudyResult, out) -> dict:
         "plan": result.plan.to_dict(),
         "missing": list(result.missing),
         "simulation_seconds": result.seconds,
+        "resumed": result.resumed,
     }
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -446,8 +447,10 @@ def load_study(folder) -> StudyResult:
                                                            "adaptive_curves.csv")]
     except (KeyError, TypeError, OSError, ValueError) as exc:
         raise InvalidFileError(f"the adaptive study in {folder} cannot be read: {exc}") from exc
-    return StudyResult(plan, frames[0], frames[1], tuple(data.get("missing", ())),
-                       float(data.get("simulation_seconds", 0.0)))
+    return StudyResult(
+        plan, frames[0], frames[1], tuple(data.get("missing", ())),
+        float(data.get("simulation_seconds", 0.0)), resumed=int(data.get("resumed", 0)),
+    )
 
 
 def save_study(result: StudyResult, analysis: dict, out, figures: bool = True) -> dict:
