@@ -4,6 +4,8 @@ reproduce   simulate one of the paper's experiments with simulated teachers and 
             CSV/JSON results, a text report beside the paper's numbers and the figure.
 robustness  rerun an experiment over several seeds and report how often the paper's
             conclusions hold.
+adaptive    beyond the paper: adaptive test sets (and the next-demo hint) against BF with
+            simulated teachers, common random numbers, claims with CIs over seeds.
 class       read a class's saved runs (a folder with one subfolder per trainee, or a zip
             of it), list every file not counted and why, and run the paper's statistics
             on the class beside the paper's numbers and a simulated class of its size.
@@ -13,6 +15,7 @@ Examples::
     python -m tutor reproduce --experiment 1 --seed 0 --out results/
     python -m tutor reproduce --experiment 2 --seed 0 --out results/ --n 12
     python -m tutor robustness --experiment 1 --seeds 10 --out results/
+    python -m tutor adaptive --seeds 10 --out results_adaptive/
     python -m tutor class /srv/lfd-class --experiment 1 --out class_results/
 """
 
@@ -98,6 +101,31 @@ def _parser() -> argparse.ArgumentParser:
     rob.add_argument(
         "--seeds", type=_whole_number(1), default=10, help="how many seeds (default 10)"
     )
+    ada = sub.add_parser(
+        "adaptive", help="adaptive feedback (and the next-demo hint) against BF, over seeds"
+    )
+    ada.add_argument(
+        "--seeds", type=_whole_number(2, 1000), default=10,
+        help="seeds 0 .. S-1 of the main study (default 10, at least 2 for a CI over seeds)",
+    )
+    ada.add_argument("--out", default="results", help="folder for the files (default results/)")
+    ada.add_argument(
+        "--n", type=_whole_number(1, MAX_TEACHERS, " teachers"), default=None,
+        help="teachers per seed and policy (default 36; 36-60)",
+    )
+    ada.add_argument(
+        "--variant-seeds", type=_whole_number(0, 1000), default=None,
+        help="seeds per teacher-model variant for the robustness check (default 2; 0: none)",
+    )
+    ada.add_argument(
+        "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
+    )
+    ada.add_argument(
+        "--quick", action="store_true",
+        help="a reduced test run (4 teachers x 1 run x 2 seeds), not a result",
+    )
+    ada.add_argument("--no-progress", action="store_true", help="no progress bar")
+    ada.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
     cls = sub.add_parser(
         "class", help="the paper's statistics on a class's own saved runs"
     )
@@ -152,13 +180,57 @@ def class_command(args) -> None:
         print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
 
 
+def adaptive_plan(args):
+    """The checked :class:`~tutor.study.adaptive.StudyPlan` of ``lfd-tutor adaptive``."""
+    import dataclasses
+
+    from .errors import InvalidParameterError
+    from .study.adaptive import QUICK, StudyPlan, check_plan
+
+    if args.quick:
+        if args.n is not None:
+            raise InvalidParameterError(
+                "--quick fixes the size (4 teachers x 1 run x 2 seeds); drop --n or --quick"
+            )
+        plan = QUICK
+    else:
+        plan = StudyPlan(seeds=args.seeds)
+        if args.n is not None:
+            plan = dataclasses.replace(plan, n=args.n)
+    if args.variant_seeds is not None:
+        plan = dataclasses.replace(plan, variant_seeds=args.variant_seeds)
+    return check_plan(plan)
+
+
+def adaptive_command(args) -> None:
+    """``lfd-tutor adaptive``: check everything, simulate, print the report and save."""
+    from .study.report import check_out_dir
+
+    plan = adaptive_plan(args)
+    check_out_dir(args.out)  # before any work: nothing is made yet
+    from .study.adaptive import run_study
+    from .study.adaptive_report import analyse_study, format_study_report, save_raw, save_study
+
+    out = check_out_dir(args.out)
+    partial = out / "adaptive_partial.jsonl"  # an interrupted study resumes from it
+    result = run_study(
+        plan, workers=args.workers, progress=not args.no_progress, checkpoint=partial
+    )
+    save_raw(result, out)  # the simulation is kept even if the analysis fails
+    analysis = analyse_study(result)
+    print(format_study_report(result, analysis))
+    paths = save_study(result, analysis, out, figures=not args.no_figures)
+    partial.unlink(missing_ok=True)
+    print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
+
+
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
-    if args.command == "class":
+    if args.command in ("class", "adaptive"):
         from .errors import TutorError
 
         try:
-            class_command(args)
+            (class_command if args.command == "class" else adaptive_command)(args)
         except TutorError as exc:
             print(f"error ({type(exc).__name__}): {exc}", file=sys.stderr)
             return 2
