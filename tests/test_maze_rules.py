@@ -55,7 +55,7 @@ def test_rule_two_until_the_first_start_is_surrounded(task):
 
 def test_rule_zero_when_all_green(task):
     s = TeachingSession(task)
-    for demo in [(0.03, 0.03), (0.17, 0.03), (0.10, 0.03), (0.06, 0.052)]:
+    for demo in [(0.03, 0.03), (0.17, 0.03), (0.10, 0.03), (0.06, 0.052), (0.14, 0.052)]:
         s.add_demo(task.layout.reference_path(demo))
-    assert s.latest.efficacy == 1.0  # these four starts cover the whole start zone
+    assert s.latest.efficacy == 1.0  # these five starts cover the whole start zone
     assert advise(task, s).rule == 0
