@@ -220,6 +220,29 @@ def test_batch_equals_one_by_one():
     np.testing.assert_allclose(mean_fb, mean_b, atol=1e-12)
 
 
+def test_shared_rotations_take_the_affine_path_and_agree_with_the_general_one():
+    """Conditions whose frames differ only in their origins (both tasks) share one
+    precision per time step: the batch (affine path) equals one-by-one reproduction
+    (the general path, B = 1) to rounding, and moving one origin moves only its row."""
+    rng = np.random.default_rng(12)
+    demos, frames = frame_demos(rng, 5, 3, 3, 40)
+    model = TPGMM(4).fit(demos, frames)
+    rotations = [random_frame(rng, 3).A for _ in range(3)]
+    conditions = [[Frame(A, rng.normal(size=3)) for A in rotations] for _ in range(9)]
+    times = np.linspace(0, 1, 25)
+    mean_b, cov_b = model.reproduce_batch(conditions, times)
+    for i, fr in enumerate(conditions):
+        mean, cov = model.reproduce(fr, times)
+        np.testing.assert_allclose(mean_b[i], mean, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(cov_b[i], cov, rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(cov_b, np.broadcast_to(cov_b[:1], cov_b.shape))
+    moved = [list(fr) for fr in conditions]
+    moved[4][1] = Frame(rotations[1], conditions[4][1].b + 0.5)
+    mean_m, _ = model.reproduce_batch(moved, times)
+    np.testing.assert_allclose(np.delete(mean_m, 4, 0), np.delete(mean_b, 4, 0), atol=1e-12)
+    assert np.abs(mean_m[4] - mean_b[4]).max() > 1e-3
+
+
 @pytest.mark.parametrize("d", [1, 2, 3, 4])
 def test_one_identity_frame_is_plain_gmr(d):
     """With one identity frame, reproduce equals GMR by the independent gmr package."""

@@ -419,6 +419,7 @@ class Arm:
         tilt_tol: float = TILT_TOL,
         check_collisions: bool = True,
         max_iter: int = 30,
+        stop_at_problem: bool = False,
     ) -> Tracking:
         """Track a tool path with IK, each sample warm-started from the previous one.
 
@@ -440,6 +441,10 @@ class Arm:
             Test every sample for self- and obstacle collisions (about 30 us each).
         max_iter : int
             IK iterations per sample (the first sample gets 200).
+        stop_at_problem : bool
+            Stop at the first sample not reached or in collision (a path is judged by
+            its first problem): the samples after it are not followed and count as
+            not reached (``errors`` nan, ``qs`` the configuration at the problem).
 
         Returns
         -------
@@ -471,6 +476,10 @@ class Arm:
             errors[t], rot_errors[t] = ep, er
             if check_collisions:
                 collision[t] = pin.computeCollisions(model, data, gm, gd, q, True)
+            if stop_at_problem and (collision[t] or ep > reach_tol or er > tilt_tol):
+                qs[t + 1 :] = q
+                errors[t + 1 :] = rot_errors[t + 1 :] = np.nan
+                break
         converged = (errors <= reach_tol) & (rot_errors <= tilt_tol)
         at_limit = np.any((qs[:, :n] <= lo) | (qs[:, :n] >= hi), axis=1)
         bad = ~converged | collision

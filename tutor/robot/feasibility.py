@@ -36,6 +36,46 @@ MAP_FORMAT = "lfd-tutor-feasibility-map"
 MAP_VERSION = 1
 
 
+
+def _first(bad: np.ndarray) -> np.ndarray:
+    """Index of the first True along the last axis of ``bad`` (..., T); T when none."""
+    T = bad.shape[-1]
+    return np.where(bad.any(axis=-1), np.argmax(bad, axis=-1), T)
+
+
+def _known_bad(known_bad, shape) -> np.ndarray:
+    """``known_bad`` as a bool array of the paths' sample shape (all False when None)."""
+    if known_bad is None:
+        return np.zeros(shape, dtype=bool)
+    try:
+        return np.broadcast_to(np.asarray(known_bad, dtype=bool), shape)
+    except ValueError as exc:
+        raise InvalidParameterError(
+            f"known_bad must have shape {shape} like the paths' samples, got "
+            f"{np.shape(known_bad)}"
+        ) from exc
+
+
+_FIRST_DOC = """Index of each path's first sample outside X or in ``known_bad``.
+
+        A realisation is judged by its first failure (criterion (i) and the task's own
+        criteria alike), so this is what a task needs; {how}
+
+        Parameters
+        ----------
+        paths : array_like (..., T, 3)
+            Tool positions (m, base frame).
+        gripper : array_like (..., T), optional
+            Hand command per sample (default open).
+        known_bad : array_like of bool (..., T), optional
+            Samples already known to fail for another reason (e.g. below the table).
+
+        Returns
+        -------
+        ndarray of int (...)
+            T for a path whose every sample is in X and not known bad.
+        """
+
 class FeasibilityMap:
     """A voxel map of X: where the tool can be, pointing down, reached and collision-free.
 
@@ -175,9 +215,16 @@ class FeasibilityMap:
         """
         return self.value(points, gripper) > 0
 
+    def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
+        P, G = check_paths(paths, gripper)
+        return _first(~self.contains(P, G) | _known_bad(known_bad, P.shape[:-1]))
+
+    first_outside.__doc__ = _FIRST_DOC.format(how="a lookup.")
+
     def path_ok(self, paths, gripper=None) -> np.ndarray:
         """Whether every sample of each path (..., T, 3) is in X; bool (...)."""
-        return self.contains(paths, gripper).all(axis=-1)
+        P, _ = check_paths(paths, gripper)
+        return self.first_outside(P, gripper) == P.shape[-2]
 
     def matches(
         self,
@@ -339,9 +386,31 @@ class FullCheck:
             out[i] = tr.converged & ~tr.collision
         return out.reshape(shape)
 
+    def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
+        P, G = check_paths(paths, gripper)
+        shape = P.shape[:-2]
+        T = P.shape[-2]
+        limit = _first(_known_bad(known_bad, P.shape[:-1])).reshape(-1)
+        paths, G = P.reshape(-1, T, 3), G.reshape(-1, T)
+        rows = zip(paths, G, limit, strict=True)
+        out = np.array([self.first_problem(p, g, n) for p, g, n in rows])
+        return out.reshape(shape).astype(int)
+
+    first_outside.__doc__ = _FIRST_DOC.format(
+        how="each path is followed only up to its first problem or known-bad sample."
+    )
+
+    def first_problem(self, path, gripper, limit: int) -> int:
+        """The first problem of the arm along ``path[:limit]`` (``limit`` when none)."""
+        if limit <= 0:
+            return 0
+        tr = self.arm.follow(path[:limit], gripper[:limit], stop_at_problem=True)
+        return limit if tr.first_problem is None else tr.first_problem
+
     def path_ok(self, paths, gripper=None) -> np.ndarray:
         """Whether every sample of each path (..., T, 3) is reached collision-free; (...)."""
-        return self.contains(paths, gripper).all(axis=-1)
+        P, _ = check_paths(paths, gripper)
+        return self.first_outside(P, gripper) == P.shape[-2]
 
 
 class MapCheck:
@@ -407,6 +476,28 @@ class MapCheck:
             out[idx] = self.full.contains(P[idx], G[idx])
         return out
 
+    def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
+        P, G = check_paths(paths, gripper)
+        known = _known_bad(known_bad, P.shape[:-1])
+        value = self.map.value(P, G)
+        near = np.linalg.norm(P - self.shoulder, axis=-1) <= self.reach
+        unknown = np.isneginf(value) & near
+        first_known = _first(known)
+        first = np.minimum(_first((value <= 0) & ~unknown), first_known)
+        # an off-grid sample the arm may reach comes first: follow the path in full,
+        # from the start up to its first known-bad sample
+        redo = _first(unknown) < first
+        for i in np.argwhere(redo):
+            i = tuple(i)
+            first[i] = self.full.first_problem(P[i], G[i], int(first_known[i]))
+        return first
+
+    first_outside.__doc__ = _FIRST_DOC.format(
+        how="the map answers inside its grid; a path with an off-grid sample the arm "
+        "may reach before any failure is followed in full."
+    )
+
     def path_ok(self, paths, gripper=None) -> np.ndarray:
         """Whether every sample of each path (..., T, 3) is in X; bool (...)."""
-        return self.contains(paths, gripper).all(axis=-1)
+        P, _ = check_paths(paths, gripper)
+        return self.first_outside(P, gripper) == P.shape[-2]

@@ -8,13 +8,11 @@ copy, warm-started when the task's learner warm-starts, the same criteria). Ties
 the first candidate, so the answer is deterministic. It is the step of the optimal
 teacher (:mod:`tutor.study.optimal`) and of a next-demo hint.
 
-Two exact shortcuts make a candidate cost one refit (about 10-20 ms) and little else:
-
-- :func:`realise`: R^ as an affine map of the frames' origins when every frame's rotation
-  is the same for all conditions (both tasks: every frame is axis aligned), equal to
-  ``learner.reproduce_batch`` to rounding;
-- :func:`judged`: the pick-and-place criterion (i) follows the arm only for realisations
-  that meet criteria (ii) and (iii); a realisation is in B iff it meets them all.
+A candidate costs one refit (about 10-20 ms) and little else: R^ is the learner's
+batch reproduction (:func:`realise`; with axis-aligned frames, an affine map of the
+frames' origins, :func:`tutor.tpgmm.regression.product_of_frames`), and
+:func:`judged` follows the pick-and-place arm (criterion (i)) only for realisations that
+meet criteria (ii) and (iii): a realisation is in B iff it meets them all.
 
 :class:`Scorer` spreads the candidates over worker processes (both cores by default)
 and stops at the first candidate reaching eps = 1.
@@ -29,7 +27,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..tpgmm.linalg import inv_small, sym
 
 __all__ = [
     "Bank",
@@ -161,29 +158,10 @@ def _whole(value, name: str, lowest: int) -> int:
 
 
 def realise(task, learner) -> np.ndarray:
-    """R^: the learner's mean realisation from every condition of B^, (n, T, d).
-
-    The same as ``learner.reproduce_batch(task.frame_batch(task.conditions), task.times)``
-    (the session's), computed as an affine map of the frame origins when every frame's
-    rotation is the same for all conditions: the product's precision is then one per
-    time step, shared by every condition.
-    """
-    batch = task.frame_batch(task.conditions)
-    W = batch.A_inv  # (B, P, d, d)
-    if not np.array_equal(W, np.broadcast_to(W[:1], W.shape)):
-        return learner.reproduce_batch(batch, task.times)[0]
-    W = W[0][:, None]  # (P, 1, d, d): one per frame, shared by every time step
-    Wt = np.swapaxes(W, -1, -2)
-    mean, cov = learner.regress_local(task.times)  # (P, T, d), (P, T, d, d)
-    L = sym(inv_small(cov))
-    world = Wt @ L @ W  # each frame's precision in the world, (P, T, d, d)
-    prec_cov = sym(inv_small(world.sum(axis=0)))  # the product's covariance, (T, d, d)
-    base = (prec_cov @ (Wt @ (L @ mean[..., None])).sum(axis=0))[..., 0]  # (T, d)
-    gain = prec_cov @ world  # how each frame's origin moves the mean, (P, T, d, d)
-    P, T, d, _ = gain.shape
-    B = batch.b.shape[0]
-    shift = gain.transpose(1, 2, 0, 3).reshape(T * d, P * d) @ batch.b.reshape(B, P * d).T
-    return base[None] + shift.reshape(T, d, B).transpose(2, 0, 1)
+    """R^: the learner's mean realisation from every condition of B^, (n, T, d)
+    (``learner.reproduce_batch`` under ``task.frame_batch(task.conditions)``, as the
+    session computes it)."""
+    return learner.reproduce_batch(task.frame_batch(task.conditions), task.times)[0]
 
 
 @dataclass

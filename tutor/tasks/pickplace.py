@@ -350,24 +350,24 @@ class PickPlaceTask(Task):
         half = sc.tray_size / 2
         in_tray = np.all(np.abs(pos - sc.tray_center) <= half, axis=-1)
         bad = below_table | in_tray
-        unreachable = np.zeros_like(bad)
-        if self.feasibility is not None:
-            unreachable = ~self.feasibility.contains(pos, traj[..., 3])
-            bad = bad | unreachable
+        n = traj.shape[1]
+        if self.feasibility is None:
+            first_bad = np.where(bad.any(axis=1), np.argmax(bad, axis=1), n)
+        else:  # a path is judged by its first failure: the arm is followed up to it
+            first_bad = self.feasibility.first_outside(pos, traj[..., 3], known_bad=bad)
         grab, release = self._events(traj)
         rows = np.arange(len(traj))
         grab_d = np.linalg.norm(pos[rows, np.maximum(grab, 0)] - conditions, axis=1)
         rel_d = np.linalg.norm(pos[rows, np.maximum(release, 0)] - sc.release_point, axis=1)
-        path_ok = ~bad.any(axis=1)
+        path_ok = first_bad == n
         grab_ok = (grab >= 0) & (grab_d <= ctx["delta_g"])
         rel_ok = (release >= 0) & (rel_d <= ctx["delta_r"])
         passed = path_ok & grab_ok & rel_ok
         reasons = [""] * len(traj)
-        n = traj.shape[1]
         for i in np.flatnonzero(~passed):
             parts = []
             if not path_ok[i]:
-                k = int(np.argmax(bad[i]))
+                k = int(first_bad[i])
                 what = (
                     "went through the table"
                     if below_table[i, k]
