@@ -3,8 +3,8 @@
 Two numbers: the cost of one simulated run in each arm (median seconds on one process,
 over a few teachers: what sizes the study), and the wall time of a whole study plan on
 all cores (simulation, statistics and files), median of ``--repeats``. The full plan
-(``--plan full``: 36 teachers x 3 runs x 10 seeds, HF on 6 teachers, four variants on
-one seed) takes tens of minutes, so the default is ``--plan quick``.
+(``--plan full``: 36 teachers x 3 runs x 10 seeds in every arm, four variants on
+three seeds) takes about twenty minutes, so the default is ``--plan quick``.
 
 Run:  .venv/bin/python benchmarks/bench_adaptive.py [--plan quick|full] [--repeats 1]
           [--teachers 3] [--workers N]

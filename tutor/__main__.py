@@ -115,7 +115,12 @@ def _parser() -> argparse.ArgumentParser:
     )
     ada.add_argument(
         "--variant-seeds", type=_whole_number(0, 1000), default=None,
-        help="seeds per teacher-model variant for the robustness check (default 2; 0: none)",
+        help="seeds per teacher-model variant for the robustness check (default 3; 0: none)",
+    )
+    ada.add_argument(
+        "--hf-teachers", type=_whole_number(2, MAX_TEACHERS, " teachers"), default=None,
+        help="teach only the first N teachers of each seed in the HF arms, whose runs "
+        "cost about 7 times the others' (default: all)",
     )
     ada.add_argument(
         "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
@@ -199,6 +204,8 @@ def adaptive_plan(args):
             plan = dataclasses.replace(plan, n=args.n)
     if args.variant_seeds is not None:
         plan = dataclasses.replace(plan, variant_seeds=args.variant_seeds)
+    if args.hf_teachers is not None:
+        plan = dataclasses.replace(plan, hf_teachers=args.hf_teachers)
     return check_plan(plan)
 
 
