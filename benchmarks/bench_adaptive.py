@@ -13,11 +13,9 @@ Run:  .venv/bin/python benchmarks/bench_adaptive.py [--plan quick|full] [--repea
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import tempfile
 import time
-from pathlib import Path
 
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
@@ -27,6 +25,7 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
+from results_file import RESULTS, save  # noqa: E402
 
 from tutor.study.adaptive import (  # noqa: E402
     QUICK,
@@ -36,14 +35,14 @@ from tutor.study.adaptive import (  # noqa: E402
     teach_policy,  # noqa: E402
 )
 from tutor.study.adaptive_report import analyse_study, save_study  # noqa: E402
-from tutor.study.cohort import _limit_threads  # noqa: E402
+from tutor.workers import one_blas_thread  # noqa: E402
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_adaptive.json"
+DEFAULT_OUT = RESULTS / "bench_adaptive.json"
 
 
 def per_run(teachers: int = 3) -> dict:
     """Median seconds per simulated run of every arm (one process, seed 0)."""
-    _limit_threads()
+    one_blas_thread()
     teach_policy("BF", 0, 0, 1)  # warm the task and the imports
     out = {}
     for name in available_policies():
@@ -90,8 +89,7 @@ def main() -> None:
         print(f"{name:<6} {s:.3f} s per run (median, one process)")
     print(f"{args.plan} study: median {report['study_s']:.1f} s over {args.repeats} "
           f"(target for the full study <= 600 s)")
-    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(report, indent=2))
+    save(report, args.out)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,6 @@ Run:  .venv/bin/python benchmarks/bench_class.py [--repeats 5] [--experiment2]
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -26,11 +25,12 @@ import time
 from pathlib import Path
 
 import numpy as np
+from results_file import RESULTS, save
 
 from tutor.study.simulated_class import write_simulated_class
 
 ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_OUT = ROOT / "benchmarks" / "results" / "bench_class.json"
+DEFAULT_OUT = RESULTS / "bench_class.json"
 TARGET_S = 5.0
 
 
@@ -83,8 +83,7 @@ def main() -> None:
             print(f"lfd-tutor class, {key}: {r['trainees']} trainees, {r['files']} files: "
                   f"median {r['median_s']:.2f} s over {args.repeats} runs "
                   f"(target for experiment 1: <= {TARGET_S:.0f} s)")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2))
+    save(result, args.out)
     print(f"written: {args.out}")
 
 

@@ -11,7 +11,6 @@ Run:  .venv/bin/python benchmarks/bench_cohort.py [--repeats 3] [--seed 0] [--wo
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import tempfile
 import time
@@ -25,11 +24,12 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
+from results_file import RESULTS, save  # noqa: E402
 
 from tutor.study.cohort import run_experiment  # noqa: E402
 from tutor.study.report import analyse, save_result  # noqa: E402
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_cohort.json"
+DEFAULT_OUT = RESULTS / "bench_cohort.json"
 
 
 def one(experiment: int, seed: int, workers) -> float:
@@ -77,9 +77,7 @@ def main(argv=None) -> None:
         f"  both:                                      {r['both_s']:6.1f} s "
         f"(target <= {r['target_s']:.0f} s)"
     )
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(r, indent=2))
-    print(f"written to {args.out}")
+    save(r, args.out)
 
 
 if __name__ == "__main__":

@@ -12,17 +12,17 @@ Run:  .venv/bin/python benchmarks/bench_hint.py [--sets 5] [--repeats 3]
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
 import numpy as np
+from results_file import RESULTS, save
 
 from tutor.tasks.hint import HINT_CANDIDATES, hint_bank, next_demo_hint
 from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_hint.json"
+DEFAULT_OUT = RESULTS / "bench_hint.json"
 STEPS = (0, 1, 3, 6)
 TARGET_S = 1.0
 
@@ -65,9 +65,7 @@ def main(argv=None) -> None:
     print(f"{'M':>3} {'median s':>9} {'max s':>7}")
     for m in STEPS:
         print(f"{m:3d} {result['median_s'][m]:9.3f} {result['max_s'][m]:7.3f}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2))
-    print(f"written to {args.out}")
+    save(result, args.out)
 
 
 if __name__ == "__main__":

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import json
 import os
 import random
 import sys
@@ -39,6 +38,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from results_file import RESULTS, save  # noqa: E402
+
 from tests.hub.hubkit import (  # noqa: E402
     Hub,
     KernelTrainee,
@@ -47,7 +48,7 @@ from tests.hub.hubkit import (  # noqa: E402
     pss_kb,
 )
 
-DEFAULT_OUT = REPO / "benchmarks" / "results" / "bench_hub_load.json"
+DEFAULT_OUT = RESULTS / "bench_hub_load.json"
 #: kernels started at once while the room sets up (a 2-core machine chokes on 30)
 SETUP_AT_ONCE = 4
 
@@ -206,8 +207,7 @@ def main(argv=None) -> dict:
         if exposed:
             raise SystemExit(f"listening beyond loopback: {exposed}")
     result = summarise(trainees, load, memory, setup, args, mem_drop)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2))
+    save(result, args.out)
     lat, cpu, mem = result["latency_ms"], result["cpu"], result["memory_mb"]
     print(
         f"{args.trainees} trainees, a demo every {args.interval:.0f} s for "
@@ -219,8 +219,7 @@ def main(argv=None) -> dict:
         f"memory (PSS): {mem['per_user_pss_median']:.0f} MB per trainee (median, max "
         f"{mem['per_user_pss_max']:.0f}), hub+proxy+culler {mem['hub_proxy_culler_pss']:.0f} MB, "
         f"total {mem['total_pss']:.0f} MB; MemAvailable dropped "
-        f"{mem['mem_available_drop']:.0f} MB\n"
-        f"written to {args.out}"
+        f"{mem['mem_available_drop']:.0f} MB"
     )
     return result
 

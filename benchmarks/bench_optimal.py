@@ -14,17 +14,17 @@ Run:  .venv/bin/python benchmarks/bench_optimal.py [--repeats 3] [--workers 2]
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
 import numpy as np
+from results_file import RESULTS, save
 
 from tutor.study import optimal
 from tutor.tasks.maze import MazeTask
 from tutor.tasks.pickplace import PickPlaceTask
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_optimal.json"
+DEFAULT_OUT = RESULTS / "bench_optimal.json"
 
 
 def run(task, repeats: int, workers: int) -> dict:
@@ -69,9 +69,7 @@ def main(argv=None) -> None:
         path = ", ".join(f"{e:.2f}" for e in r["greedy_efficacy"])
         hint = ", ".join(f"{s:.2f}" for s in r["hint_s_after"].values())
         print(f"{name:>10} {r['bank']:5d} {r['greedy_s']:9.1f} {path:>22} {hint:>21}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=2))
-    print(f"written to {args.out}")
+    save(results, args.out)
 
 
 if __name__ == "__main__":

@@ -15,17 +15,17 @@ Run:  .venv/bin/python benchmarks/bench_robot.py [--repeats 21] [--out PATH]
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import time
 from pathlib import Path
 
 import numpy as np
+from results_file import RESULTS, save
 
 from tutor.robot import START_CONFIGURATION, FeasibilityMap, get_arm, scene_obstacles
 from tutor.tasks.pickplace import load_scene
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_robot.json"
+DEFAULT_OUT = RESULTS / "bench_robot.json"
 
 
 def _median_ms(fn, repeats: int) -> float:
@@ -110,8 +110,7 @@ def main(argv=None) -> int:
     for name, ms in results["median_ms"].items():
         print(f"  {name:<{width}}  {ms:9.3f} ms")
     print(f"  follow max tracking error: {1e3 * results['follow_max_error_m']:.3f} mm")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=2) + "\n")
+    save(results, args.out)
     print(f"wrote {args.out}")
     return 0
 

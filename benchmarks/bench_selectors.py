@@ -16,16 +16,16 @@ Run:  .venv/bin/python benchmarks/bench_selectors.py [--repeats 15] [--sets 3] [
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
 import numpy as np
+from results_file import RESULTS, save
 
 from tutor.framework import TeachingSession
 from tutor.framework.selectors import SELECTORS, SelectionContext
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_selectors.json"
+DEFAULT_OUT = RESULTS / "bench_selectors.json"
 #: the cost each selector must stay within, per demo (ms)
 TARGET_MS = 20.0
 
@@ -98,8 +98,7 @@ def main(argv=None) -> None:
         print("  M  " + "".join(f"{n:>14}" for n in names))
         for m, row in res.items():
             print(f"  {m:<3}" + "".join(f"{row[n]:>14.2f}" for n in names))
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=2))
+    save(results, args.out)
     print(f"wrote {args.out}")
 
 

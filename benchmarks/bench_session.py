@@ -23,19 +23,19 @@ from __future__ import annotations
 
 import argparse
 import copy
-import json
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+from results_file import RESULTS, save
 
 from tutor.framework import TeachingSession
 from tutor.tasks.maze import MazeTask
 from tutor.tasks.maze_run import MazeRun
 from tutor.tasks.pickplace import PickPlaceTask
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_session.json"
+DEFAULT_OUT = RESULTS / "bench_session.json"
 
 
 def run(repeats: int = 9, n_sets: int = 5, steps=(5, 10, 20)) -> dict:
@@ -167,9 +167,7 @@ def main(argv=None) -> None:
             f"{r['judge_100_plants_ms']:13.1f}"
         )
     results = {"maze": maze, "maze_recorded": recorded, "pickplace": pick}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=2))
-    print(f"written to {args.out}")
+    save(results, args.out)
 
 
 if __name__ == "__main__":

@@ -13,17 +13,17 @@ from __future__ import annotations
 
 import argparse
 import copy
-import json
 import platform
 import time
 from pathlib import Path
 
 import numpy as np
+from results_file import RESULTS, save
 
 from tutor.tasks.maze import load_layout
 from tutor.tpgmm import TPGMM
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "bench_tpgmm.json"
+DEFAULT_OUT = RESULTS / "bench_tpgmm.json"
 
 
 def _demos(layout, n_demos: int, seed: int):
@@ -113,9 +113,7 @@ def main(argv=None) -> None:
             f"{r['warm_refit_ms_worst_set']:7.1f} {r['warm_refit_n_iter']:7d} "
             f"{r['reproduce_140_ms']:13.2f} {r['reproduce_140_cached_regression_ms']:13.2f}"
         )
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=2))
-    print(f"written to {args.out}")
+    save(results, args.out)
 
 
 if __name__ == "__main__":

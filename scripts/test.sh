@@ -5,34 +5,29 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
-# system packages needed by browser tests are installed here
-# The browser tests drive Debian's chromium (playwright uses it; it downloads no browser).
-if ! command -v chromium >/dev/null 2>&1; then
+# need_debian_package COMMAND PACKAGE WHAT: install Debian's PACKAGE (as root, with apt-get)
+# when COMMAND is missing; otherwise say how and stop.
+need_debian_package() {
+    local command="$1" package="$2" what="$3"
+    command -v "$command" >/dev/null 2>&1 && return 0
     if [[ "$(id -u)" -eq 0 ]] && command -v apt-get >/dev/null 2>&1; then
-        echo "lfd-tutor: installing Debian's chromium for the browser tests" >&2
+        echo "lfd-tutor: installing Debian's $package for $what" >&2
         apt-get update -qq
-        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$package" >/dev/null
     else
-        echo "lfd-tutor: the browser tests need Debian's chromium;" \
-             "run 'sudo apt-get install chromium' and try again." >&2
+        echo "lfd-tutor: $what needs Debian's $package;" \
+             "run 'sudo apt-get install $package' and try again." >&2
         exit 1
     fi
-fi
+}
+
+# The browser tests drive Debian's chromium (playwright uses it; it downloads no browser).
+need_debian_package chromium chromium "the browser tests"
 
 # The hub test (tests/hub) runs JupyterHub's proxy, configurable-http-proxy, from npm:
 # installed once into .hub/ (gitignored), where deploy/jupyterhub_config.py finds it.
 if [[ ! -x .hub/node_modules/.bin/configurable-http-proxy ]]; then
-    if ! command -v npm >/dev/null 2>&1; then
-        if [[ "$(id -u)" -eq 0 ]] && command -v apt-get >/dev/null 2>&1; then
-            echo "lfd-tutor: installing Debian's npm for the hub test's proxy" >&2
-            apt-get update -qq
-            DEBIAN_FRONTEND=noninteractive apt-get install -y -qq npm >/dev/null
-        else
-            echo "lfd-tutor: the hub test needs npm for configurable-http-proxy;" \
-                 "run 'sudo apt-get install npm' and try again." >&2
-            exit 1
-        fi
-    fi
+    need_debian_package npm npm "the hub test's proxy"
     echo "lfd-tutor: installing configurable-http-proxy (npm) into .hub/ for the hub test" >&2
     npm install --no-save --no-fund --no-audit --prefix .hub configurable-http-proxy >/dev/null
 fi

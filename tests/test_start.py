@@ -20,21 +20,6 @@ from tutor.views.start import (
 from tutor.views.worked_example import example_png, instruction_text, instruction_widget
 
 
-@pytest.fixture
-def person(tmp_path, monkeypatch):
-    """A person at the notebook (not headless), runs saved under tmp_path."""
-    for var in (
-        "TUTOR_HEADLESS",
-        "TUTOR_TRAINEE",
-        "TUTOR_CONDITION",
-        "TUTOR_CLASS_PLAN",
-        "JUPYTERHUB_USER",
-    ):
-        monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("TUTOR_SESSION_DIR", str(tmp_path))
-    return monkeypatch
-
-
 def read_record(path) -> RunRecord:
     return RunRecord.from_dict(json.loads(path.read_text(encoding="utf-8")))
 

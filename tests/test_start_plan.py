@@ -17,21 +17,6 @@ PLAN = "trainee,condition\nAna,RF\nBen,sf\nstudent07,NF\nZoë,balanced\n"
 
 
 @pytest.fixture
-def person(tmp_path, monkeypatch):
-    """A person at the notebook (not headless), runs saved under tmp_path/sessions."""
-    for var in (
-        "TUTOR_HEADLESS",
-        "TUTOR_TRAINEE",
-        "TUTOR_CONDITION",
-        "TUTOR_CLASS_PLAN",
-        "JUPYTERHUB_USER",
-    ):
-        monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("TUTOR_SESSION_DIR", str(tmp_path / "sessions"))
-    return monkeypatch
-
-
-@pytest.fixture
 def plan(person, tmp_path):
     """The educator's class plan, named by TUTOR_CLASS_PLAN; returns its path."""
     path = tmp_path / "plan.csv"

@@ -119,8 +119,20 @@ def start_and_finish_nf(page, artifacts, name: str) -> None:
     nf.get_by_role("button", name="Finish", exact=True).click()
 
 
+def sketchpad_ids(page) -> list[str]:
+    """The ids of every sketchpad's elements in the page (NF's and VF's both shown)."""
+    return page.evaluate(
+        "() => Array.from(document.querySelectorAll('[id^=\"lfd-pad-\"]'), (e) => e.id)"
+    )
+
+
 def teach_one_demo(page, artifacts, name: str):
     tutor, pad = sketchpad_for(page, "VF")
+    # NF's finished sketchpad is still on the page: each element id is there once, so
+    # a screen reader's aria-describedby reads the sketchpad it belongs to
+    ids = sketchpad_ids(page)
+    assert page.locator(".lfd-sketchpad").count() >= 2 and len(ids) >= 4
+    assert len(ids) == len(set(ids)), f"element ids repeat across sketchpads: {sorted(ids)}"
     assert "demonstrations: 0" in tutor.inner_text()
     assert "efficacy" not in tutor.inner_text()
     before_id = int(pad.get_attribute("data-render-id"))

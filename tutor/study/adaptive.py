@@ -51,7 +51,6 @@ import dataclasses
 import os
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,7 +58,8 @@ import pandas as pd
 
 from ..errors import InvalidParameterError
 from ..teachers.traits import DEFAULT_POPULATION, Population, TeacherTraits
-from .cohort import StudySettings, _init_worker, _limit_threads, _rng, _task, rows_of
+from ..workers import one_blas_thread, process_pool
+from .cohort import StudySettings, _rng, _task, rows_of
 from .limits import MAX_TEACHERS
 
 __all__ = [
@@ -643,14 +643,11 @@ def run_study(
 
     try:
         if workers == 1 or not jobs:
-            _limit_threads()
+            one_blas_thread()
             for job in jobs:
                 keep(*_job(job))
         else:
-            import multiprocessing as mp
-
-            ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-            with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
+            with process_pool(workers) as pool:
                 for key, rows, curve in pool.map(_job, jobs, chunksize=2):
                     keep(key, rows, curve)
     finally:

@@ -28,7 +28,7 @@ from .. import paper
 from ..errors import SaveError
 from . import adaptive_stats as st
 from .adaptive import BASELINE, POLICIES, StudyResult, is_secondary
-from .report import check_out_dir
+from .report import check_out_dir, pct
 
 __all__ = [
     "PLAN_FORMAT",
@@ -127,10 +127,6 @@ def _plain(value):
     return value
 
 
-def _pct(x) -> str:
-    return "n/a" if x is None or not np.isfinite(x) else f"{100 * x:.1f} %"
-
-
 def _pts(x) -> str:
     return "n/a" if not np.isfinite(x) else f"{100 * x:+.1f}"
 
@@ -151,11 +147,11 @@ def _policy_lines(table: pd.DataFrame) -> list[str]:
     )
     lines = [head, "-" * len(head)]
     for name, r in table.iterrows():
-        eps = f"{_pct(r.efficacy)} [{_pct(r.efficacy_low)}, {_pct(r.efficacy_high)}]"
+        eps = f"{pct(r.efficacy)} [{pct(r.efficacy_low)}, {pct(r.efficacy_high)}]"
         lines.append(
-            f"{name:<7} {eps:>26} {_pct(r.reached_target):>12} {_pct(r.final_reached):>11} "
+            f"{name:<7} {eps:>26} {pct(r.reached_target):>12} {pct(r.final_reached):>11} "
             f"{_num(r.undemonstrated):>10} {_num(r.n_demos, 2):>6} {_num(r.retries, 2):>6} "
-            f"{_pct(r.eta):>7} {_pct(r.eta_target):>8} {_num(r.robot_seconds, 0):>8} "
+            f"{pct(r.eta):>7} {pct(r.eta_target):>8} {_num(r.robot_seconds, 0):>8} "
             f"{_num(r.seconds, 0):>8}"
         )
     return lines
@@ -182,7 +178,7 @@ def _claim(name: str, analysis: dict, seeds: int) -> str:
         f"{_num(base.retries, 2)} redone, {_num(me.robot_seconds, 0)} vs "
         f"{_num(base.robot_seconds, 0)} robot seconds, {_num(me.undemonstrated)} vs "
         f"{_num(base.undemonstrated)} undemonstrated plants, "
-        f"{_pct(time_share.get(name, np.nan))} vs {_pct(time_share.get(BASELINE, np.nan))} "
+        f"{pct(time_share.get(name, np.nan))} vs {pct(time_share.get(BASELINE, np.nan))} "
         "of runs ended by the clock."
     )
     return text + why
@@ -229,8 +225,8 @@ def format_study_report(result: StudyResult, analysis: dict) -> str:
     lines += [head, "-" * len(head)]
     for column in st.DELTA_MEASURES:
         table = analysis["deltas"][column]
-        pct = column in ("efficacy", "reached_target")
-        fmt = _pts if pct else (lambda v: _num(v, 2))
+        points = column in ("efficacy", "reached_target")
+        fmt = _pts if points else (lambda v: _num(v, 2))
         for name, d in table.iterrows():
             lines.append(
                 f"{name:<7} {column:<15} {fmt(d['mean']):>8} {_ci(d, fmt=fmt):>20} "
@@ -280,8 +276,8 @@ def format_study_report(result: StudyResult, analysis: dict) -> str:
         lines += [
             "",
             f"The optimal teacher (greedy machine teacher, bundled reference): eps = 1 with "
-            f"{opt['n_demos']} demos, best eta {_pct(opt['best_eta'])}; no pair of demos "
-            f"reaches 0.9 (best pair {_pct(opt['best_pair'])}).",
+            f"{opt['n_demos']} demos, best eta {pct(opt['best_eta'])}; no pair of demos "
+            f"reaches 0.9 (best pair {pct(opt['best_pair'])}).",
         ]
     lines += [
         "",
@@ -317,8 +313,9 @@ def study_figure(result: StudyResult, analysis: dict):
     matplotlib.figure.Figure
     """
     import matplotlib.pyplot as plt
+    from matplotlib import patheffects
 
-    from .figures import OPTIMAL_LINE, PAPER_MARK
+    from .figures import OPTIMAL_LINE
 
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), layout="constrained")
     ax = axes[0]
@@ -335,7 +332,8 @@ def study_figure(result: StudyResult, analysis: dict):
     ax.set_xlabel("seconds used of the 15-minute run")
     ax.set_ylabel("efficacy ε (mean over runs)")
     ax.set_title("(a) ε against the clock")
-    ax.legend(fontsize=7, loc="upper left")
+    # below the panel, where it hides no curve
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=3)
 
     ax = axes[1]
     deltas = analysis["deltas"]["efficacy"]
@@ -372,8 +370,11 @@ def study_figure(result: StudyResult, analysis: dict):
                      table["undemonstrated_high"].to_numpy(float) - mean])
     ax.bar(x, mean, color=[COLOURS.get(n, "#999") for n in names], yerr=np.nan_to_num(err),
            capsize=3)
-    ax.scatter([names.index(BASELINE)], [analysis["paper_bf_undemonstrated_per_run"]],
-               label="paper's BF (827 / 27 runs)", **PAPER_MARK)
+    # across BF's own bar, in black with a white edge: BF's bar is the paper mark's red
+    at = names.index(BASELINE)
+    ax.hlines(analysis["paper_bf_undemonstrated_per_run"], at - 0.45, at + 0.45, colors="k",
+              linestyles="--", lw=2.2, zorder=3, label="paper's BF (827 / 27 runs)",
+              path_effects=[patheffects.withStroke(linewidth=4, foreground="white")])
     ax.set_xticks(x, names)
     ax.set_ylabel("undemonstrated plants per run (of 100)")
     ax.set_title("(c) undemonstrated plants per run")

@@ -30,7 +30,7 @@ from ..errors import SaveError
 from . import stats
 from .classroom import ClassResult
 from .cohort import EXPERIMENTS
-from .report import _jsonable, check_out_dir, load_result
+from .report import _jsonable, check_out_dir, load_result, test_lines
 
 __all__ = [
     "MIN_PER_CONDITION",
@@ -176,49 +176,10 @@ def analyse_class(result: ClassResult, seed: int = 0) -> dict:
 # ---------------------------------------------------------------- the report
 
 
-def _pct(x) -> str:
-    return "n/a" if x is None or not np.isfinite(x) else f"{100 * x:.1f} %"
-
-
 def _test_lines(tests: dict, experiment: int, who: str) -> list[str]:
     if not tests["tested"]:
         return [f"{who}: no test — {tests['why_not']}"]
-    st, lines = tests["stats"], []
-    if experiment == 1:
-        a, pa = st["anova"], paper.EXPERIMENT_1["anova"]
-        sph = "holds" if a["sphericity_ok"] else "violated: Greenhouse-Geisser p used"
-        lines.append(
-            f"{who}: repeated-measures ANOVA F({a['ddof1']},{a['ddof2']}) = {a['F']:.3f}, "
-            f"p = {a['p_used']:.3g}   (paper: F({pa['ddof1']},{pa['ddof2']}) = {pa['F']}, "
-            f"p = {pa['p']})"
-        )
-        lines.append(
-            f"  Mauchly's sphericity: W = {a['sphericity_W']:.3f}, p = "
-            f"{a['sphericity_p']:.3g} ({sph})"
-        )
-        for _, r in st["pairwise"].iterrows():
-            pp = paper.EXPERIMENT_1["pairwise_p"].get((r.A, r.B), float("nan"))
-            lines.append(
-                f"  {r.A}-{r.B}: paired t = {r['T']:.2f}, Bonferroni p = {r.p_bonf:.3g}   "
-                f"(paper p = {pp})"
-            )
-    else:
-        a, pa = st["anova"], paper.EXPERIMENT_2["mixed_anova"]
-        for key in ("condition", "run", "interaction"):
-            r, ref = a[key], pa[key]
-            ref_text = (
-                f"F({ref['ddof1']},{ref['ddof2']}) = {ref['F']}, p = {ref['p']}"
-                if isinstance(ref, dict)
-                else ref
-            )
-            lines.append(
-                f"{who}: mixed ANOVA, {key}: F({r['ddof1']},{r['ddof2']}) = {r['F']:.3f}, "
-                f"p = {r['p']:.3g}   (paper: {ref_text})"
-            )
-        for _, r in st["pairwise"].iterrows():
-            lines.append(
-                f"  {r.A}-{r.B}: Welch t = {r['T']:.2f}, Bonferroni p = {r.p_bonf:.3g}"
-            )
+    lines = test_lines(tests["stats"], experiment, who)
     lines.append(
         "  the paper's conclusions: "
         + "; ".join(f"{k} {'holds' if v else 'does not hold'}" for k, v in

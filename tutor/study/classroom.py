@@ -33,7 +33,6 @@ from __future__ import annotations
 import os
 import zipfile
 from collections import Counter
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path, PurePosixPath
 
@@ -43,7 +42,8 @@ from ..errors import InvalidFileError, InvalidParameterError, TutorError
 from ..fileio import MAX_FILE_BYTES, decode_text, megabytes, parse_json, read_json
 from ..framework.assignment import ClassPlan, load_plan
 from ..framework.record import RunRecord
-from .cohort import EXPERIMENTS, StudySettings, _limit_threads, _task, rows_of
+from ..workers import one_blas_thread, process_pool
+from .cohort import EXPERIMENTS, StudySettings, _task, rows_of
 
 __all__ = [
     "ClassResult",
@@ -545,14 +545,9 @@ class _Pool:
 
     def __enter__(self):
         if self.workers > 1:
-            import multiprocessing as mp
-
-            ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-            self._pool = ProcessPoolExecutor(
-                self.workers, mp_context=ctx, initializer=_limit_threads
-            )
+            self._pool = process_pool(self.workers)
         else:
-            _limit_threads()
+            one_blas_thread()
         return self
 
     def map(self, fn, items, meanwhile=None) -> list:

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -37,6 +37,7 @@ import pandas as pd
 from ..errors import InvalidParameterError
 from ..framework.failures import Thresholds, is_ambiguous
 from ..teachers.traits import DEFAULT_POPULATION, Population
+from ..workers import one_blas_thread, process_pool
 from .limits import MAX_TEACHERS
 
 __all__ = [
@@ -334,25 +335,6 @@ def simulate_teacher(
     return rows, demo_rows
 
 
-def _init_worker() -> None:
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ[var] = "1"
-    _limit_threads()
-
-
-_LIMITER = None
-
-
-def _limit_threads() -> None:
-    """One BLAS thread in this process (same arithmetic in every worker and in serial runs)."""
-    global _LIMITER
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - numpy then uses its default threads
-        return
-    _LIMITER = threadpool_limits(1)
-
-
 # ---------------------------------------------------------------- a cohort
 
 
@@ -406,7 +388,7 @@ def run_experiment(
     results = {}
     try:
         if workers == 1:
-            _limit_threads()
+            one_blas_thread()
             for i in range(n):
                 results[i] = simulate_teacher(
                     experiment, i, seed, n, population, settings, conditions
@@ -414,10 +396,7 @@ def run_experiment(
                 if bar is not None:
                     bar.update(1)
         else:
-            import multiprocessing as mp
-
-            ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-            with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
+            with process_pool(workers) as pool:
                 futures = {
                     pool.submit(
                         simulate_teacher, experiment, i, seed, n, population, settings, conditions

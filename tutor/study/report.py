@@ -106,8 +106,50 @@ def replication_table(runs: pd.DataFrame, n_boot: int = 2000, seed: int = 0) -> 
     return pd.DataFrame({"this cohort": own, "paper's means": matched, "8 of 10 seeds": chance})
 
 
-def _pct(x) -> str:
+def pct(x) -> str:
+    """A share as a percentage with one decimal ("n/a" when there is none)."""
     return "n/a" if x is None or not np.isfinite(x) else f"{100 * x:.1f} %"
+
+
+def test_lines(st: dict, experiment: int, lead: str = "") -> list[str]:
+    """The paper's tests on ``st`` (:func:`tutor.study.stats.experiment_1` or ``_2``)
+    beside the paper's values, one line each; ``lead`` names whose they are."""
+    lead = f"{lead}: " if lead else ""
+    lines = []
+    if experiment == 1:
+        a, pa = st["anova"], paper.EXPERIMENT_1["anova"]
+        sph = "holds" if a["sphericity_ok"] else "violated: Greenhouse-Geisser p used"
+        lines.append(
+            f"{lead}repeated-measures ANOVA F({a['ddof1']},{a['ddof2']}) = {a['F']:.3f}, "
+            f"p = {a['p_used']:.3g}   (paper: F({pa['ddof1']},{pa['ddof2']}) = {pa['F']}, "
+            f"p = {pa['p']})"
+        )
+        lines.append(
+            f"  Mauchly's sphericity: W = {a['sphericity_W']:.3f}, p = "
+            f"{a['sphericity_p']:.3g} ({sph})"
+        )
+        for _, r in st["pairwise"].iterrows():
+            pp = paper.EXPERIMENT_1["pairwise_p"].get((r.A, r.B), float("nan"))
+            lines.append(
+                f"  {r.A}-{r.B}: paired t = {r['T']:.2f}, Bonferroni p = {r.p_bonf:.3g}   "
+                f"(paper p = {pp})"
+            )
+        return lines
+    a, pa = st["anova"], paper.EXPERIMENT_2["mixed_anova"]
+    for key in ("condition", "run", "interaction"):
+        r, ref = a[key], pa[key]
+        ref_text = (
+            f"F({ref['ddof1']},{ref['ddof2']}) = {ref['F']}, p = {ref['p']}"
+            if isinstance(ref, dict)
+            else ref
+        )
+        lines.append(
+            f"{lead}mixed ANOVA, {key}: F({r['ddof1']},{r['ddof2']}) = {r['F']:.3f}, "
+            f"p = {r['p']:.3g}   (paper: {ref_text})"
+        )
+    for _, r in st["pairwise"].iterrows():
+        lines.append(f"  {r.A}-{r.B}: Welch t = {r['T']:.2f}, Bonferroni p = {r.p_bonf:.3g}")
+    return lines
 
 
 def format_report(result: CohortResult, analysis: dict) -> str:
@@ -117,53 +159,26 @@ def format_report(result: CohortResult, analysis: dict) -> str:
     lines = [f"Experiment {exp}: {n} simulated teachers, seed {result.seed}", ""]
     lines.append(analysis["summary"].to_string(float_format=lambda v: f"{v:.3f}"))
     lines.append("")
+    lines += test_lines(st, exp)
     if exp == 1:
-        a, pa = st["anova"], paper.EXPERIMENT_1["anova"]
-        sph = "holds" if a["sphericity_ok"] else "violated: Greenhouse-Geisser p used"
-        lines.append(
-            f"Repeated-measures ANOVA: F({a['ddof1']},{a['ddof2']}) = {a['F']:.3f}, "
-            f"p = {a['p_used']:.3g}   (paper: F({pa['ddof1']},{pa['ddof2']}) = {pa['F']}, "
-            f"p = {pa['p']})"
-        )
-        lines.append(
-            f"Mauchly's sphericity: W = {a['sphericity_W']:.3f}, p = {a['sphericity_p']:.3g} "
-            f"({sph})"
-        )
-        lines.append("Pairwise (paired t, Bonferroni):")
-        for _, r in st["pairwise"].iterrows():
-            pp = paper.EXPERIMENT_1["pairwise_p"].get((r.A, r.B), float("nan"))
-            lines.append(f"  {r.A}-{r.B}: T = {r['T']:.2f}, p = {r.p_bonf:.3g}   (paper p = {pp})")
         rel, prel = analysis["relative"], paper.EXPERIMENT_1["relative"]
         lines.append(
             "Relative improvement of median eta: "
-            + ", ".join(f"{k} {_pct(rel[k])} (paper {_pct(prel[k])})" for k in rel)
+            + ", ".join(f"{k} {pct(rel[k])} (paper {pct(prel[k])})" for k in rel)
             + "; the paper rounds to 'about 180 %'"
         )
         good = int((result.runs.query("condition == 'NF'").reached_target).sum())
         well, of = paper.EXPERIMENT_1["did_well_without_feedback"], paper.EXPERIMENT_1["n"]
         lines.append(f"NF teachers reaching 90 %: {good} of {n} (paper: {well} of {of} did well)")
     else:
-        a, pa = st["anova"], paper.EXPERIMENT_2["mixed_anova"]
-        for key in ("condition", "run", "interaction"):
-            r = a[key]
-            ref = pa[key]
-            ref_text = (
-                f"F({ref['ddof1']},{ref['ddof2']}) = {ref['F']}, p = {ref['p']}"
-                if isinstance(ref, dict)
-                else ref
-            )
-            lines.append(
-                f"Mixed ANOVA, {key}: F({r['ddof1']},{r['ddof2']}) = {r['F']:.3f}, "
-                f"p = {r['p']:.3g}   (paper: {ref_text})"
-            )
-        lines.append(f"Mauchly's sphericity (runs): p = {a['sphericity_p']:.3g} (paper p = 0.5372)")
-        lines.append("Pairwise, teachers' mean eta (Welch t, Bonferroni):")
-        for _, r in st["pairwise"].iterrows():
-            lines.append(f"  {r.A}-{r.B}: T = {r['T']:.2f}, p = {r.p_bonf:.3g}")
+        a, ref = st["anova"], paper.EXPERIMENT_2["sphericity"]
+        lines.append(
+            f"  Mauchly's sphericity (runs): p = {a['sphericity_p']:.3g} (paper p = {ref['p']})"
+        )
         rel, prel = analysis["relative"], paper.EXPERIMENT_2["relative"]
         lines.append(
             "BF relative to the mean of NF, RF, SF: "
-            + ", ".join(f"{k} {_pct(rel[k])} (paper {_pct(prel[k])})" for k in rel)
+            + ", ".join(f"{k} {pct(rel[k])} (paper {pct(prel[k])})" for k in rel)
         )
         lines.append("")
         fail = analysis["failures"].copy()
@@ -392,14 +407,14 @@ def seeds_report(table: pd.DataFrame, experiment: int) -> str:
     )
     lines = [f"Over seeds {first}-{last} ({len(table)} cohorts of the paper's size):", ""]
     lines.append(f"{kind} eta per condition, mean over the seeds (paper):")
-    lines += [f"  {c}: {_pct(table[f'eta {c}'].mean())} ({_pct(ref[c])})" for c in conds]
+    lines += [f"  {c}: {pct(table[f'eta {c}'].mean())} ({pct(ref[c])})" for c in conds]
     relative = [c for c in table.columns if c.startswith("relative ")]
     lines.append("relative improvement over the seeds, range (median):")
     for c in relative:
         values = table[c].dropna()
         lines.append(
-            f"  {c[len('relative ') :]}: {_pct(values.min())}-{_pct(values.max())} "
-            f"({_pct(values.median())})"
+            f"  {c[len('relative ') :]}: {pct(values.min())}-{pct(values.max())} "
+            f"({pct(values.median())})"
         )
     if experiment == 2:
         lines.append("failures over all teachers and runs, mean over the seeds (paper):")

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import os
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from pathlib import Path
 
@@ -30,7 +29,8 @@ from ..errors import InvalidParameterError, SaveError
 from ..fileio import write_json
 from ..framework.record import Trainee
 from ..views.start import run_file_name
-from .cohort import StudySettings, _limit_threads, check_request, teach_runs
+from ..workers import one_blas_thread, process_pool
+from .cohort import StudySettings, check_request, teach_runs
 
 __all__ = ["write_simulated_class", "trainee_name", "DAMAGES"]
 
@@ -134,13 +134,10 @@ def write_simulated_class(
     items = [(experiment, i, seed, n) for i in range(n)]
     workers = min(os.cpu_count() or 1, n) if workers is None else workers
     if workers > 1:
-        import multiprocessing as mp
-
-        ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-        with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_limit_threads) as pool:
+        with process_pool(workers) as pool:
             taught = list(pool.map(_teacher_records, items))
     else:
-        _limit_threads()
+        one_blas_thread()
         taught = [_teacher_records(item) for item in items]
     out = {"written": [], "unfinished": [], "damaged": []}
     spoil = list(DAMAGES.values())

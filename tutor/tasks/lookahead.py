@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..workers import can_fork, one_blas_thread, process_pool
 
 __all__ = [
     "Bank",
@@ -250,19 +251,6 @@ def shared():
     return _SHARED["task"], _SHARED["bank"]
 
 
-def _one_blas_thread() -> None:
-    """One BLAS thread in this process: the same arithmetic here and in every worker."""
-    global _LIMITER
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - numpy then uses its default threads
-        return
-    _LIMITER = threadpool_limits(1)
-
-
-_LIMITER = None
-
-
 class Scorer:
     """Scores bank demos for one task, on ``workers`` processes (or here, for one).
 
@@ -274,25 +262,18 @@ class Scorer:
     """
 
     def __init__(self, task, bank: Bank, workers: int | None = None):
-        import multiprocessing as mp
-
         if workers is None:
             workers = min(os.cpu_count() or 1, 2)
         self.workers = _whole(workers, "workers", 1)
-        if "fork" not in mp.get_all_start_methods():
+        if not can_fork():  # the workers must inherit the task and the bank
             self.workers = 1
         self.task, self.bank, self._pool = task, bank, None
 
     def __enter__(self) -> Scorer:
-        _one_blas_thread()
+        one_blas_thread()
         _SHARED.update(task=self.task, bank=self.bank)
         if self.workers > 1:
-            import multiprocessing as mp
-            from concurrent.futures import ProcessPoolExecutor
-
-            self._pool = ProcessPoolExecutor(
-                self.workers, mp_context=mp.get_context("fork"), initializer=_one_blas_thread
-            )
+            self._pool = process_pool(self.workers)
         return self
 
     def __exit__(self, *exc) -> None:

@@ -42,7 +42,9 @@ const CSS = `
   clip: rect(0 0 0 0); white-space: nowrap; }
 `;
 
-let uid = 0;
+// Element ids must be unique in the page. Each widget may load its own copy of this
+// module (a counter here would restart at 1 in each), so the count lives on the page.
+const UID_KEY = "__lfdSketchpadCount";
 
 function floats(value) {
   // Binary traits arrive as a DataView (or an ArrayBuffer); copy so the floats are aligned.
@@ -72,7 +74,8 @@ function paths(value, samples) {
 }
 
 function render({ model, el }) {
-  const id = `lfd-pad-${++uid}`;
+  globalThis[UID_KEY] = (globalThis[UID_KEY] || 0) + 1;
+  const id = `lfd-pad-${globalThis[UID_KEY]}`;
   const root = document.createElement("div");
   root.className = "lfd-sketchpad";
   // JupyterLab's keyboard shortcuts (Enter = edit cell, arrows = select cell...) must not

@@ -1,0 +1,50 @@
+"""Worker processes for the simulations and replays: one BLAS thread each.
+
+Cohorts, the adaptive study, simulated classes, a class's replays and the lookahead's
+scoring all spread independent work over processes. They share this one way of doing
+it: :func:`process_pool` forks where the platform can (the workers inherit what the
+parent has loaded) and spawns otherwise, and every worker, like a serial run, does its
+arithmetic on one BLAS thread (:func:`one_blas_thread`), so a result does not depend on
+how many processes computed it.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+from concurrent.futures import ProcessPoolExecutor
+
+__all__ = ["can_fork", "one_blas_thread", "init_worker", "process_pool"]
+
+_THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+#: the active threadpoolctl limit of this process (kept so it stays in force)
+_LIMITER = None
+
+
+def can_fork() -> bool:
+    """Whether worker processes can fork from this one (not on Windows, say)."""
+    return "fork" in mp.get_all_start_methods()
+
+
+def one_blas_thread() -> None:
+    """One BLAS thread in this process: the same arithmetic here and in every worker."""
+    global _LIMITER
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - numpy then uses its default threads
+        return
+    _LIMITER = threadpool_limits(1)
+
+
+def init_worker() -> None:
+    """A worker's start: one thread for OpenMP and BLAS, in itself and its children."""
+    for var in _THREAD_VARIABLES:
+        os.environ[var] = "1"
+    one_blas_thread()
+
+
+def process_pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` processes started by :func:`init_worker` (fork if possible)."""
+    ctx = mp.get_context("fork" if can_fork() else "spawn")
+    return ProcessPoolExecutor(workers, mp_context=ctx, initializer=init_worker)
