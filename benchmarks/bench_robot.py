@@ -111,7 +111,6 @@ def main(argv=None) -> int:
         print(f"  {name:<{width}}  {ms:9.3f} ms")
     print(f"  follow max tracking error: {1e3 * results['follow_max_error_m']:.3f} mm")
     save(results, args.out)
-    print(f"wrote {args.out}")
     return 0
 
 

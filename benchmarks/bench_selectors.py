@@ -99,7 +99,6 @@ def main(argv=None) -> None:
         for m, row in res.items():
             print(f"  {m:<3}" + "".join(f"{row[n]:>14.2f}" for n in names))
     save(results, args.out)
-    print(f"wrote {args.out}")
 
 
 if __name__ == "__main__":

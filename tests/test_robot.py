@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import time
 import zipfile
 
 import numpy as np
@@ -485,21 +484,6 @@ def test_map_lookup_shapes_and_outside(fmap):
         fmap.contains(np.zeros((4, 2)))
     with pytest.raises(InvalidParameterError):
         fmap.contains(pts, np.zeros(3))
-
-
-def test_map_is_fast(fmap):
-    rng = np.random.default_rng(0)
-    pts = rng.uniform([0.1, -0.45, -0.05], [0.8, 0.65, 0.65], size=(100, 200, 3))
-    g = (rng.random((100, 200)) > 0.5).astype(float)
-    fmap.path_ok(pts, g)
-    best = min(_timed(lambda: fmap.path_ok(pts, g)) for _ in range(5))
-    assert best < 0.03, f"100 x 200 lookups took {1e3 * best:.1f} ms"
-
-
-def _timed(fn):
-    t0 = time.perf_counter()
-    fn()
-    return time.perf_counter() - t0
 
 
 def test_map_file_loads_without_pickle(fmap):

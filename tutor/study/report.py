@@ -114,15 +114,19 @@ def pct(x) -> str:
 def test_lines(st: dict, experiment: int, lead: str = "") -> list[str]:
     """The paper's tests on ``st`` (:func:`tutor.study.stats.experiment_1` or ``_2``)
     beside the paper's values, one line each; ``lead`` names whose they are."""
-    lead = f"{lead}: " if lead else ""
+    def named(text: str) -> str:  # "Who: repeated-measures ..." or "Repeated-measures ..."
+        return f"{lead}: {text}" if lead else text[0].upper() + text[1:]
+
     lines = []
     if experiment == 1:
         a, pa = st["anova"], paper.EXPERIMENT_1["anova"]
         sph = "holds" if a["sphericity_ok"] else "violated: Greenhouse-Geisser p used"
         lines.append(
-            f"{lead}repeated-measures ANOVA F({a['ddof1']},{a['ddof2']}) = {a['F']:.3f}, "
-            f"p = {a['p_used']:.3g}   (paper: F({pa['ddof1']},{pa['ddof2']}) = {pa['F']}, "
-            f"p = {pa['p']})"
+            named(
+                f"repeated-measures ANOVA F({a['ddof1']},{a['ddof2']}) = {a['F']:.3f}, "
+                f"p = {a['p_used']:.3g}   (paper: F({pa['ddof1']},{pa['ddof2']}) = {pa['F']}, "
+                f"p = {pa['p']})"
+            )
         )
         lines.append(
             f"  Mauchly's sphericity: W = {a['sphericity_W']:.3f}, p = "
@@ -144,8 +148,15 @@ def test_lines(st: dict, experiment: int, lead: str = "") -> list[str]:
             else ref
         )
         lines.append(
-            f"{lead}mixed ANOVA, {key}: F({r['ddof1']},{r['ddof2']}) = {r['F']:.3f}, "
-            f"p = {r['p']:.3g}   (paper: {ref_text})"
+            named(
+                f"mixed ANOVA, {key}: F({r['ddof1']},{r['ddof2']}) = {r['F']:.3f}, "
+                f"p = {r['p']:.3g}   (paper: {ref_text})"
+            )
+        )
+    if "sphericity_p" in a:
+        ref = paper.EXPERIMENT_2["sphericity"]
+        lines.append(
+            f"  Mauchly's sphericity (runs): p = {a['sphericity_p']:.3g} (paper p = {ref['p']})"
         )
     for _, r in st["pairwise"].iterrows():
         lines.append(f"  {r.A}-{r.B}: Welch t = {r['T']:.2f}, Bonferroni p = {r.p_bonf:.3g}")
@@ -171,10 +182,6 @@ def format_report(result: CohortResult, analysis: dict) -> str:
         well, of = paper.EXPERIMENT_1["did_well_without_feedback"], paper.EXPERIMENT_1["n"]
         lines.append(f"NF teachers reaching 90 %: {good} of {n} (paper: {well} of {of} did well)")
     else:
-        a, ref = st["anova"], paper.EXPERIMENT_2["sphericity"]
-        lines.append(
-            f"  Mauchly's sphericity (runs): p = {a['sphericity_p']:.3g} (paper p = {ref['p']})"
-        )
         rel, prel = analysis["relative"], paper.EXPERIMENT_2["relative"]
         lines.append(
             "BF relative to the mean of NF, RF, SF: "
