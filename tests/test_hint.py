@@ -260,17 +260,14 @@ def test_a_hint_that_fails_is_said_not_raised(task, monkeypatch):
     assert not [b for b in tutor.plant_buttons if "lfd-hint" in b._dom_classes]
 
 
-def test_the_start_form_offers_hf_and_the_educator_can_fix_it(tmp_path, monkeypatch):
-    for var in ("TUTOR_HEADLESS", "TUTOR_TRAINEE", "TUTOR_CONDITION", "TUTOR_CLASS_PLAN"):
-        monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("TUTOR_SESSION_DIR", str(tmp_path))
+def test_the_start_form_offers_hf_and_the_educator_can_fix_it(person):
     from tutor.views.start import condition_from_env, pick_and_place_experiment
 
     form = pick_and_place_experiment(scene3d=False)
     buttons = form.condition_buttons
     assert list(buttons.options) == ["NF", "RF", "BF", "SF", "AF", "HF"]
     assert "beyond the paper" in buttons.tooltips[-1] and "HF" in form.beyond_note.value
-    monkeypatch.setenv("TUTOR_CONDITION", "hf")
+    person.setenv("TUTOR_CONDITION", "hf")
     assert condition_from_env() == "HF"
     locked = pick_and_place_experiment(scene3d=False)
     assert locked.condition == "HF" and locked.condition_buttons.disabled

@@ -321,10 +321,7 @@ def test_the_cohort_runs_af_only_when_asked():
     assert (runs["condition"] == "AF").sum() == 6  # 2 teachers x 3 runs
 
 
-def test_the_start_form_offers_af_after_the_papers_four(tmp_path, monkeypatch):
-    for var in ("TUTOR_HEADLESS", "TUTOR_TRAINEE", "TUTOR_CONDITION", "TUTOR_CLASS_PLAN"):
-        monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("TUTOR_SESSION_DIR", str(tmp_path))
+def test_the_start_form_offers_af_after_the_papers_four(person):
     from tutor.views.start import condition_from_env, pick_and_place_experiment
 
     form = pick_and_place_experiment(scene3d=False)
@@ -333,7 +330,7 @@ def test_the_start_form_offers_af_after_the_papers_four(tmp_path, monkeypatch):
     assert "beyond the paper" in buttons.tooltips[-2] and "beyond the paper" in (
         form.beyond_note.value
     )
-    monkeypatch.setenv("TUTOR_CONDITION", "af")
+    person.setenv("TUTOR_CONDITION", "af")
     assert condition_from_env() == "AF"
 
 

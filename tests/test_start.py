@@ -166,21 +166,28 @@ def test_a_wrong_educator_condition_is_said_and_blocks_start(person):
     assert form.tutors == [] and "TUTOR_CONDITION" in form.note.value
 
 
-def test_pick_and_place_runs_one_after_another_in_the_chosen_condition(person):
+@pytest.mark.parametrize("condition", ["RF", "AF", "HF"])
+def test_pick_and_place_runs_one_after_another_in_the_chosen_condition(person, condition):
+    """Notebook 03's form, in one of the paper's conditions and in the two beyond it."""
     form = pick_and_place_experiment(scene3d=False)
-    form.condition_buttons.value = "RF"
+    form.condition_buttons.value = condition
     form.name.value = "Ana"
     form.go.click()
     assert form.condition_buttons.disabled
     run1 = form.tutors[0]
-    assert (run1.condition, run1.record.run) == ("RF", 1)
-    assert run1.session_file.name == "pickplace_RF_run1.json"
+    assert (run1.condition, run1.record.run) == (condition, 1)
+    assert run1.session_file.name == f"pickplace_{condition}_run1.json"
     run1.buttons["Demonstrate"].click()
+    demo = run1.run.attempt.demos[0]
+    if condition == "AF":  # the robot tried the plants its selector picked
+        assert len(run1.run.session.latest.shown) > 0
+    if condition == "HF":  # the hint for the next demo is said, and the first was recorded
+        assert "learn most from" in run1.panel.value and demo.followed_rule is not None
     run1.buttons["Finish run"].click()
     assert [t.record.run for t in form.tutors] == [1, 2]
     assert form.tutors[1].task is run1.task  # one task for all runs
     record = read_record(run1.session_file)
-    assert (record.trainee.name, record.condition, record.run) == ("Ana", "RF", 1)
+    assert (record.trainee.name, record.condition, record.run) == ("Ana", condition, 1)
     assert form.save_scene(1) is None  # no 3-D view was asked for
 
 
