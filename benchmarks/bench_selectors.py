@@ -45,14 +45,9 @@ def contexts(task, m: int, n_sets: int, seed: int):
             for p in plants:
                 session.add_demo(task.demonstrate(int(p), rng), condition=task.conditions[p])
         out.append(
-            SelectionContext(
-                conditions=np.asarray(task.conditions),
-                demo_conditions=np.array(session.conditions),
-                learner=session.learner,
-                frames=task.frame_batch(task.conditions),
-                times=task.times,
-                realisations=session.realisations,
-                passed=session.latest.passed,
+            SelectionContext.of_task(
+                task, session.conditions, session.learner,
+                realisations=session.realisations, passed=session.latest.passed,
                 rng=np.random.default_rng(s),
             )
         )

@@ -162,6 +162,8 @@ def test_check_plan_refuses_bad_plans():
         (("--quick", "--n", "40"), ("InvalidParameterError", "--quick fixes the size")),
         (("--seeds", "1"), ("--seeds", ">= 2")),
         (("--workers", "0"), ("--workers",)),
+        (("--hf-teachers", "40"), ("InvalidParameterError", "--hf-teachers, at most --n")),
+        (("--hf-teachers", "1"), ("--hf-teachers", ">= 2")),
     ],
 )
 def test_bad_arguments_are_refused_before_work(tmp_path, args, words):

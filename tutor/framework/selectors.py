@@ -127,6 +127,20 @@ class SelectionContext:
     passed: np.ndarray | None = None
     rng: np.random.Generator | None = None
 
+    @classmethod
+    def of_task(cls, task, demo_conditions, learner, **known) -> SelectionContext:
+        """The context after a demo of ``task`` (its B^, frames and times filled in);
+        ``known`` gives the other fields the caller has (``realisations``, ``passed``,
+        ``rng``)."""
+        return cls(
+            conditions=np.asarray(task.conditions),
+            demo_conditions=np.array(demo_conditions),
+            learner=learner,
+            frames=task.frame_batch(task.conditions),
+            times=task.times,
+            **known,
+        )
+
     @property
     def n(self) -> int:
         return len(self.conditions)

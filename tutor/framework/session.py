@@ -387,16 +387,8 @@ class TeachingSession:
 
     def _adaptive_picks(self, learner, conds, realisations, passed) -> np.ndarray:
         """The selector's k picks after this demo (``"adaptive"`` mode)."""
-        task = self.task
-        context = SelectionContext(
-            conditions=np.asarray(task.conditions),
-            demo_conditions=np.array(conds),
-            learner=learner,
-            frames=task.frame_batch(task.conditions),
-            times=task.times,
-            realisations=realisations,
-            passed=passed,
-            rng=self.rng,
+        context = SelectionContext.of_task(
+            self.task, conds, learner, realisations=realisations, passed=passed, rng=self.rng
         )
         return self.selector(self.k, context)
 

@@ -43,7 +43,14 @@ from __future__ import annotations
 
 from .arm import Arm, IKResult, Tracking, get_arm
 from .checks import check_paths
-from .feasibility import DEFAULT_MAP_PATH, FeasibilityMap, FullCheck, MapCheck, default_map
+from .feasibility import (
+    DEFAULT_MAP_PATH,
+    FeasibilityMap,
+    FullCheck,
+    MapCheck,
+    default_map,
+    first_failure,
+)
 from .model import (
     DOWN,
     FINGER_OPEN,
@@ -65,6 +72,7 @@ __all__ = [
     "FeasibilityMap",
     "FullCheck",
     "MapCheck",
+    "first_failure",
     "check_paths",
     "default_map",
     "open_box",

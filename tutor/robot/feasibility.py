@@ -22,6 +22,7 @@ from .model import DOWN, REACH_TOL, TILT_TOL
 from .obstacles import check_boxes
 
 __all__ = [
+    "first_failure",
     "FeasibilityMap",
     "FullCheck",
     "MapCheck",
@@ -37,10 +38,20 @@ MAP_VERSION = 1
 
 
 
-def _first(bad: np.ndarray) -> np.ndarray:
+def first_failure(bad) -> np.ndarray:
     """Index of the first True along the last axis of ``bad`` (..., T); T when none."""
-    T = bad.shape[-1]
-    return np.where(bad.any(axis=-1), np.argmax(bad, axis=-1), T)
+    bad = np.asarray(bad, dtype=bool)
+    return np.where(bad.any(axis=-1), np.argmax(bad, axis=-1), bad.shape[-1])
+
+
+class _PathCriterion:
+    """What the three checks of criterion (i) share: a path is judged by its first
+    sample outside X (:meth:`first_outside`, each check's own)."""
+
+    def path_ok(self, paths, gripper=None) -> np.ndarray:
+        """Whether every sample of each path (..., T, 3) is in X; bool (...)."""
+        P, _ = check_paths(paths, gripper)
+        return self.first_outside(P, gripper) == P.shape[-2]
 
 
 def _known_bad(known_bad, shape) -> np.ndarray:
@@ -76,7 +87,7 @@ _FIRST_DOC = """Index of each path's first sample outside X or in ``known_bad``.
             T for a path whose every sample is in X and not known bad.
         """
 
-class FeasibilityMap:
+class FeasibilityMap(_PathCriterion):
     """A voxel map of X: where the tool can be, pointing down, reached and collision-free.
 
     Each voxel centre stores a signed margin (m): positive inside X. Near the border
@@ -217,14 +228,10 @@ class FeasibilityMap:
 
     def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
         P, G = check_paths(paths, gripper)
-        return _first(~self.contains(P, G) | _known_bad(known_bad, P.shape[:-1]))
+        return first_failure(~self.contains(P, G) | _known_bad(known_bad, P.shape[:-1]))
 
     first_outside.__doc__ = _FIRST_DOC.format(how="a lookup.")
 
-    def path_ok(self, paths, gripper=None) -> np.ndarray:
-        """Whether every sample of each path (..., T, 3) is in X; bool (...)."""
-        P, _ = check_paths(paths, gripper)
-        return self.first_outside(P, gripper) == P.shape[-2]
 
     def matches(
         self,
@@ -342,7 +349,7 @@ def default_map(obstacles, robot: str = "panda", tool_frame: str = "panda_hand_t
     return fmap
 
 
-class FullCheck:
+class FullCheck(_PathCriterion):
     """Criterion (i) at full fidelity: :meth:`Arm.follow` along every path.
 
     Same interface as :meth:`FeasibilityMap.contains`, so a task can use either; this
@@ -390,7 +397,7 @@ class FullCheck:
         P, G = check_paths(paths, gripper)
         shape = P.shape[:-2]
         T = P.shape[-2]
-        limit = _first(_known_bad(known_bad, P.shape[:-1])).reshape(-1)
+        limit = first_failure(_known_bad(known_bad, P.shape[:-1])).reshape(-1)
         paths, G = P.reshape(-1, T, 3), G.reshape(-1, T)
         rows = zip(paths, G, limit, strict=True)
         out = np.array([self.first_problem(p, g, n) for p, g, n in rows])
@@ -407,13 +414,9 @@ class FullCheck:
         tr = self.arm.follow(path[:limit], gripper[:limit], stop_at_problem=True)
         return limit if tr.first_problem is None else tr.first_problem
 
-    def path_ok(self, paths, gripper=None) -> np.ndarray:
-        """Whether every sample of each path (..., T, 3) is reached collision-free; (...)."""
-        P, _ = check_paths(paths, gripper)
-        return self.first_outside(P, gripper) == P.shape[-2]
 
 
-class MapCheck:
+class MapCheck(_PathCriterion):
     """Criterion (i) fast: the feasibility map inside its grid, :class:`FullCheck` outside.
 
     The map covers where realisations usually go; a realisation that leaves the grid
@@ -460,33 +463,32 @@ class MapCheck:
         ndarray (..., T) of bool
         """
         P, G = check_paths(points, gripper)
-        value = self.map.value(P, G)
+        value, unknown = self._lookup(P, G)
         out = value > 0
-        near = np.linalg.norm(P - self.shoulder, axis=-1) <= self.reach
-        unknown = np.isneginf(value) & near  # off the grid but maybe reachable
-        known_bad = ~out & ~unknown
-        T = P.shape[-2]
-        first_unknown = np.where(unknown.any(axis=-1), np.argmax(unknown, axis=-1), T)
-        first_bad = np.where(known_bad.any(axis=-1), np.argmax(known_bad, axis=-1), T)
         # a path is judged by its first sample outside X: follow it in full only when
         # an unknown sample comes before any the map already rejects
-        redo = first_unknown < first_bad  # (...)
+        redo = first_failure(unknown) < first_failure(~out & ~unknown)  # (...)
         if redo.any():
             idx = np.nonzero(redo)
             out[idx] = self.full.contains(P[idx], G[idx])
         return out
 
+    def _lookup(self, P, G) -> tuple[np.ndarray, np.ndarray]:
+        """The map's margins (..., T) and the samples it cannot answer: off its grid
+        but within the arm's reach."""
+        value = self.map.value(P, G)
+        near = np.linalg.norm(P - self.shoulder, axis=-1) <= self.reach
+        return value, np.isneginf(value) & near
+
     def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
         P, G = check_paths(paths, gripper)
         known = _known_bad(known_bad, P.shape[:-1])
-        value = self.map.value(P, G)
-        near = np.linalg.norm(P - self.shoulder, axis=-1) <= self.reach
-        unknown = np.isneginf(value) & near
-        first_known = _first(known)
-        first = np.minimum(_first((value <= 0) & ~unknown), first_known)
+        value, unknown = self._lookup(P, G)
+        first_known = first_failure(known)
+        first = np.minimum(first_failure((value <= 0) & ~unknown), first_known)
         # an off-grid sample the arm may reach comes first: follow the path in full,
         # from the start up to its first known-bad sample
-        redo = _first(unknown) < first
+        redo = first_failure(unknown) < first
         for i in np.argwhere(redo):
             i = tuple(i)
             first[i] = self.full.first_problem(P[i], G[i], int(first_known[i]))
@@ -497,7 +499,3 @@ class MapCheck:
         "may reach before any failure is followed in full."
     )
 
-    def path_ok(self, paths, gripper=None) -> np.ndarray:
-        """Whether every sample of each path (..., T, 3) is in X; bool (...)."""
-        P, _ = check_paths(paths, gripper)
-        return self.first_outside(P, gripper) == P.shape[-2]

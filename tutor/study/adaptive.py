@@ -260,6 +260,10 @@ QUICK = StudyPlan(
 )
 
 
+#: how a bad ``hf_teachers`` is named in its error (it is also the CLI's --hf-teachers)
+HF_TEACHERS_NAME = "the HF teachers per seed (--hf-teachers, at most --n)"
+
+
 def _whole(value, name: str, low: int, high: int | None = None) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer):
         raise InvalidParameterError(f"{name} must be a whole number, got {value!r}")
@@ -314,7 +318,7 @@ def check_plan(plan: StudyPlan) -> StudyPlan:
         variant_policies=available_policies(variant_policies),
         n_boot=_whole(plan.n_boot, "n_boot", 100, 100_000),
         hf_teachers=None if plan.hf_teachers is None
-        else _whole(plan.hf_teachers, "hf_teachers", 2, n),
+        else _whole(plan.hf_teachers, HF_TEACHERS_NAME, 2, n),
         secondary_seeds=None if plan.secondary_seeds is None
         else _whole(plan.secondary_seeds, "secondary_seeds", 2, 1000),
     )

@@ -106,13 +106,8 @@ def hint_candidates(task, session, n: int = HINT_CANDIDATES) -> np.ndarray:
             "the hint's candidates come from what the robot learnt: give a demonstration "
             "first (with none, the hint is the optimal teacher's first pick)"
         )
-    context = SelectionContext(
-        conditions=np.asarray(task.conditions),
-        demo_conditions=np.array(session.conditions),
-        learner=session.learner,
-        frames=task.frame_batch(task.conditions),
-        times=task.times,
-        realisations=session.realisations,
+    context = SelectionContext.of_task(
+        task, session.conditions, session.learner, realisations=session.realisations
     )
     score = FrameDisagreement().scores(context)
     return np.argsort(-score, kind="stable")[: int(n)]

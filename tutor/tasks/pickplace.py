@@ -31,6 +31,7 @@ from ..errors import InvalidDemoError, InvalidParameterError
 from ..fileio import read_json
 from ..framework.task import Task, Verdict
 from ..resources import asset
+from ..robot.feasibility import first_failure
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
 from . import kinesthetic
 
@@ -352,7 +353,7 @@ class PickPlaceTask(Task):
         bad = below_table | in_tray
         n = traj.shape[1]
         if self.feasibility is None:
-            first_bad = np.where(bad.any(axis=1), np.argmax(bad, axis=1), n)
+            first_bad = first_failure(bad)
         else:  # a path is judged by its first failure: the arm is followed up to it
             first_bad = self.feasibility.first_outside(pos, traj[..., 3], known_bad=bad)
         grab, release = self._events(traj)
