@@ -205,6 +205,42 @@ def browser():
 #: console errors that are not the page's fault: the browser's own network log lines
 #: (a resource the server answers 404, e.g. a missing favicon or an optional settings
 #: file JupyterLab probes for). Page errors (uncaught exceptions) are never ignored.
+#: Installs, once per viewer page, a record of every clip meshcat's animator loads:
+#: ``[clip time, playing, duration, clips]`` right after the load. Reading the animator
+#: from Playwright takes about a second per call while the software renderer draws, so
+#: a 10 s clip can start and finish between two polls; the record in the page cannot
+#: miss it. Evaluate it on the viewer iframe's body; it returns the clips so far.
+RECORD_CLIPS = """() => {
+  if (!window.__lfdClips) {
+    window.__lfdClips = [];
+    const animator = viewer.animator;
+    const load = animator.load.bind(animator);
+    animator.load = function (...args) {
+      load(...args);
+      window.__lfdClips.push([
+        Math.max(0, ...this.actions.map((a) => a.time)),
+        this.playing,
+        this.duration,
+        this.actions.length,
+      ]);
+    };
+  }
+  return window.__lfdClips.length;
+}"""
+
+
+def wait_clip(body, n: int, timeout: float = 30.0) -> list:
+    """Wait until the viewer (iframe ``body``, recorded by RECORD_CLIPS) has loaded its
+    ``n``-th clip and return what the animator held right after that load."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        clips = body.evaluate("() => window.__lfdClips")
+        if len(clips) >= n:
+            return clips[n - 1]
+        time.sleep(0.05)
+    raise AssertionError(f"the viewer loaded {len(clips)} clips within {timeout} s, not {n}")
+
+
 BENIGN_CONSOLE = ("Failed to load resource",)
 
 

@@ -58,8 +58,10 @@ def test_dashboard_in_voila(page, dashboard_url, class_folder, artifacts):
     assert "repeated-measures ANOVA" in page.locator(".lfd-class-tests").inner_text()
     assert page.locator(".lfd-class-trainees li").count() == 2
     problems = page.locator(".lfd-class-problems li")
-    assert problems.count() == 2 and "unfinished" in problems.all_inner_texts()[0] + \
-        problems.all_inner_texts()[1]
+    assert (
+        problems.count() == 2
+        and "unfinished" in problems.all_inner_texts()[0] + problems.all_inner_texts()[1]
+    )
     page.screenshot(path=str(artifacts / "class_dashboard_voila.png"), full_page=True)
 
     # a late trainee's runs arrive; the educator presses Refresh with the mouse

@@ -25,7 +25,7 @@ import time
 import numpy as np
 import pytest
 
-from tests.browser.conftest import start_notebook_kernel
+from tests.browser.conftest import RECORD_CLIPS, start_notebook_kernel, wait_clip
 
 pytestmark = pytest.mark.browser
 
@@ -120,18 +120,13 @@ class Viewer:
     def js(self, expression: str):
         return self.body.evaluate(f"() => {expression}")
 
-    def wait_playing(self, timeout: float = 10.0) -> float:
-        """Wait until the viewer plays an animation by itself; returns its duration (s).
+    def clips(self) -> int:
+        """Start recording the clips the viewer loads (once); the number so far."""
+        return int(self.body.evaluate(RECORD_CLIPS))
 
-        The clip is set up by the viewer's own command queue after the update that carries
-        it is applied, so on a loaded machine it starts a few frames later."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            playing, duration = self.js("[viewer.animator.playing, viewer.animator.duration]")
-            if playing:
-                return float(duration)
-            time.sleep(0.05)
-        raise AssertionError(f"no animation played within {timeout} s of the update")
+    def wait_clip(self, n: int, timeout: float = 30.0) -> list:
+        """``[clip time, playing, duration, clips]`` right after the ``n``-th load."""
+        return wait_clip(self.body, n, timeout)
 
 
 def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
@@ -170,6 +165,7 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
         page.screenshot(path=str(artifacts / "pickplace_timeout_below.png"))
         raise
     page.evaluate(CLICK_CLOCK)
+    loaded = viewer.clips()
     demonstrate = tutor.get_by_role("button", name="Demonstrate", exact=True)
     tray = tutor.locator(".widget-gridbox button")
     assert _n_demos(tutor) == 0
@@ -188,8 +184,10 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
         clicked = page.evaluate("() => window.__lfdClicks")
         first_click = clicked[-2] if i == 3 else clicked[-1]
         samples.append(float(state["appliedAt"]) - first_click)
-        # the attempt plays by itself
-        assert viewer.wait_playing() > 5
+        # the attempt plays by itself, from its start
+        start, playing, duration, _ = viewer.wait_clip(loaded + 1)
+        loaded += 1
+        assert start < 1e-6 and playing and duration > 5
         time.sleep(2.5 if i == 3 else 0.3)  # a second demo from the double click would be in
         added.append(_n_demos(tutor) - n)
         print(f"demo {i + 1}: {samples[-1]:.0f} ms, {added[-1]} demo(s) added", flush=True)
@@ -197,28 +195,18 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
 
     # Replay plays the attempt again, from its start. The clip is first moved to 3 s (the
     # viewer's own scrubber call), so that a replay that went on from where the clip was
-    # would be told apart from one that restarts. What the viewer's animator holds right
-    # after it loads the replayed clip is recorded in the page (reading it from here
-    # takes about a second per call while the software renderer draws, so polling from
-    # here would see the clip seconds later).
-    clip_time = "Math.max(0, ...this.actions.map(a => a.time))"
+    # would be told apart from one that restarts.
     time.sleep(1.0)
     viewer.js("viewer.animator.seek(3.0)")
-    was = float(viewer.js(clip_time.replace("this.", "viewer.animator.")))
+    was = float(viewer.js("Math.max(0, ...viewer.animator.actions.map(a => a.time))"))
     assert was >= 2.9, f"the clip did not move to 3 s ({was:.2f} s)"
-    viewer.js(
-        "(() => { window.__lfdReplays = []; const animator = viewer.animator;"
-        " const load = animator.load.bind(animator); animator.load = function (e, t) {"
-        f" load(e, t); window.__lfdReplays.push([{clip_time}, this.playing,"
-        " this.actions.length]); }; return 0; })()"
-    )
     before = viewer.updates()
     viewer.scene.get_by_role("button", name="Replay").click()
     viewer.wait_updates(before + 1)
-    replays = viewer.js("window.__lfdReplays")
-    print(f"replay: clip at {was:.2f} s before; loaded again as {replays}", flush=True)
-    assert len(replays) == 1, replays
-    start, playing, clips = replays[0]
+    replay = viewer.wait_clip(loaded + 1)
+    print(f"replay: clip at {was:.2f} s before; loaded again as {replay}", flush=True)
+    assert viewer.clips() == loaded + 1, "Replay loaded more than one clip"
+    start, playing, _, clips = replay
     assert start < 1e-6 and playing and clips > 0, "Replay did not restart the clip"
     # one frame drawn and finished (readPixels waits for the software rasteriser)
     render_ms = viewer.js(

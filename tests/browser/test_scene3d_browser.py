@@ -16,7 +16,14 @@ import time
 
 import pytest
 
-from tests.browser.conftest import ARTIFACTS, free_port, stop, wait_http
+from tests.browser.conftest import (
+    ARTIFACTS,
+    RECORD_CLIPS,
+    free_port,
+    stop,
+    wait_clip,
+    wait_http,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -101,19 +108,18 @@ def test_notebook_viewer_updates_without_resetting_the_camera(page, voila_scene,
     turned = body.evaluate("() => viewer.camera.position.toArray()")
     page.screenshot(path=str(ARTIFACTS / "scene3d_voila_0.png"))
 
+    loaded = body.evaluate(RECORD_CLIPS)
     page.locator(".lfd-pickplace-tutor").first.get_by_role("button", name="Demonstrate").click()
     page.wait_for_function(
         f"document.querySelector('{VIEW}').dataset.updates === '2'", timeout=120_000
     )
     assert view.get_attribute("data-error") is None
     assert body.evaluate("() => viewer.camera.position.toArray()") == turned
-    # the replay of the demonstrated plant plays by itself (the viewer's command queue sets
-    # the clip up just after the update is counted: a few frames later on a loaded machine)
-    deadline = time.monotonic() + 10
-    while not body.evaluate("() => viewer.animator.playing") and time.monotonic() < deadline:
-        time.sleep(0.05)
-    duration, playing = body.evaluate("() => [viewer.animator.duration, viewer.animator.playing]")
-    assert 8 <= duration <= 12 and playing
+    # the replay of the demonstrated plant plays by itself, from its start (the viewer's
+    # command queue sets the clip up just after the update is counted)
+    start, playing, duration, clips = wait_clip(body, loaded + 1)
+    assert start < 1e-6 and playing and clips > 0
+    assert 8 <= duration <= 12
     caption = page.locator(".lfd-scene3d").first.inner_text()
     assert "attempt at plant (5, 5)" in caption
     time.sleep(3)

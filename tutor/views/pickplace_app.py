@@ -129,7 +129,7 @@ class PickPlaceTutor(TutorApp):
         self.plant_buttons = [
             w.Button(
                 description="",
-                tooltip=self.task.plant_name(i),
+                tooltip=f"{self.task.plant_name(i)}: {STATUS_WORDS['unknown']}",
                 layout=w.Layout(width="26px", height="26px", padding="0"),
             )
             for i in range(rows * cols)
