@@ -63,6 +63,9 @@ def test_dashboard_in_voila(page, dashboard_url, class_folder, artifacts):
         and "unfinished" in problems.all_inner_texts()[0] + problems.all_inner_texts()[1]
     )
     page.screenshot(path=str(artifacts / "class_dashboard_voila.png"), full_page=True)
+    # the toolbar's controls stand 8 px apart (the gap reaches the page)
+    refresh = page.locator(".lfd-class-refresh")
+    assert refresh.locator("..").evaluate("(e) => getComputedStyle(e).columnGap") == "8px"
 
     # a late trainee's runs arrive; the educator presses Refresh with the mouse
     shutil.copytree(late, folder / late.name)

@@ -157,7 +157,7 @@ class ClassDashboard:
                         self.save_button,
                         self.rehearse_button,
                     ],
-                    layout=w.Layout(align_items="center", gap="8px"),
+                    layout=w.Layout(align_items="center", grid_gap="8px"),  # CSS gap (flex too)
                 ),
                 self.status,
                 w.HTML("<h3>The class beside the paper</h3>"),
