@@ -63,6 +63,11 @@ def test_dashboard_in_voila(page, dashboard_url, class_folder, artifacts):
         and "unfinished" in problems.all_inner_texts()[0] + problems.all_inner_texts()[1]
     )
     page.screenshot(path=str(artifacts / "class_dashboard_voila.png"), full_page=True)
+    # the folder field fits the dashboard's width (its right end is on the page)
+    board = page.locator(".lfd-class-dashboard").bounding_box()
+    field = page.locator(".lfd-class-folder").bounding_box()
+    assert field["x"] + field["width"] <= board["x"] + board["width"] + 0.5, (field, board)
+    assert field["width"] > 0.9 * board["width"], (field, board)  # and is not cut short
     # the toolbar's controls stand 8 px apart (the gap reaches the page)
     refresh = page.locator(".lfd-class-refresh")
     assert refresh.locator("..").evaluate("(e) => getComputedStyle(e).columnGap") == "8px"

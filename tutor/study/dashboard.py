@@ -97,7 +97,7 @@ class ClassDashboard:
             value=str(default_class_folder() if folder is None else folder),
             description="Class folder",
             continuous_update=False,  # read when the educator presses Enter or leaves it
-            layout=w.Layout(width="100%"),
+            layout=w.Layout(width="auto"),  # the row, less its margins
             style={"description_width": "initial"},
         )
         self.folder.add_class("lfd-class-folder")

@@ -43,6 +43,14 @@ def _boxes(ax, runs, column, conds, colour="#9ecae1"):
         ax.scatter(i + rng.uniform(-0.12, 0.12, len(d)), d, s=9, color="#08519c", alpha=0.6)
 
 
+def _legend_below(ax, ncol: int = 2, drop: float = 0.1) -> None:
+    """The panel's legend under its tick labels (``drop`` axes heights below the axis),
+    where it covers no bar, box or mark."""
+    ax.legend(
+        loc="upper center", bbox_to_anchor=(0.5, -drop), ncol=ncol, fontsize=8, frameon=False
+    )
+
+
 #: how a reference cohort's numbers are marked (e.g. a simulated class of the same size)
 REFERENCE_MARK = {"marker": "^", "color": "#636363", "s": 40, "zorder": 5}
 #: how the optimal teacher's numbers are drawn (a line across the conditions)
@@ -69,7 +77,7 @@ def _optimal_demos(ax, optimal) -> None:
         label=f"fewest needed for {optimal.coverage:.0%}: {optimal.n_demos}",
         **OPTIMAL_LINE,
     )
-    ax.legend(loc="upper right", fontsize=8)
+    _legend_below(ax, 1)
 
 
 def experiment1_figure(
@@ -108,7 +116,7 @@ def experiment1_figure(
     _optimal_eta(ax, optimal)
     ax.set_ylabel("teaching efficiency η (at 90 % coverage)")
     ax.set_title(f"η per condition ({runs.teacher.nunique()} {who})")
-    ax.legend(loc="upper left", fontsize=8)
+    _legend_below(ax)
     _boxes(axes[1], runs, "n_demos", conds, "#c7e9c0")
     _optimal_demos(axes[1], optimal)
     axes[1].set_ylabel("demonstrations given")
@@ -176,7 +184,7 @@ def experiment2_figure(
     ax.set_xticks(x, conds)
     ax.set_ylabel("mean teaching efficiency η")
     ax.set_title(f"η̄ per run and overall ({runs.teacher.nunique()} {who})")
-    ax.legend(fontsize=8, ncol=2)
+    _legend_below(ax, 4)
     ax = axes[1]
     sums = runs.groupby("condition", observed=True)[["errors", "undemonstrated", "ambiguous"]]
     sums = sums.sum().loc[conds]
@@ -208,5 +216,5 @@ def experiment2_figure(
     ax.set_xticks(xk, ["demonstration\nerrors", "undemonstrated\nstates", "ambiguous\ndemos"])
     ax.set_ylabel("share of all failures of that kind")
     ax.set_title(f"Failures by condition (bars: {who}, black: paper)")
-    ax.legend(fontsize=8)
+    _legend_below(ax, len(conds), drop=0.16)  # two-line tick labels
     return fig
