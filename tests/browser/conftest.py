@@ -282,9 +282,20 @@ def accept_kernel_dialog(pg) -> None:
     dialog = pg.locator(".jp-Dialog", has_text="Select Kernel")
 
     def accept(_):
-        button = dialog.get_by_role("button", name="Select", exact=True)
-        if button.count():
-            button.click()
+        # Playwright waits, after this handler, until no such dialog is visible. On a
+        # loaded machine the dialog's button may not be there yet when the handler starts,
+        # or JupyterLab asks a second time right after the first answer: keep answering
+        # until no dialog is left (seen once on a loaded machine: the dialog stayed open for
+        # 5 minutes after the handler's one try).
+        from playwright.sync_api import Error as PlaywrightError
+
+        deadline = time.monotonic() + 120
+        while dialog.count() and time.monotonic() < deadline:
+            try:
+                dialog.first.get_by_role("button", name="Select", exact=True).click(timeout=5_000)
+                dialog.first.wait_for(state="hidden", timeout=5_000)
+            except PlaywrightError:
+                pass  # not ready, or asked again: look again
 
     pg.add_locator_handler(dialog, accept)
 
