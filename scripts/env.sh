@@ -58,7 +58,9 @@ _tutor_env_setup() {
     fi
 
     # JupyterLab settings for a workshop room: no news or update pop-ups (and no
-    # fetching them from the internet); see scripts/jupyterlab_overrides.json.
+    # fetching them from the internet), and no "Select Kernel" question: a notebook
+    # without a kernel starts the preferred one, as pressing Select would; see
+    # scripts/jupyterlab_overrides.json.
     local settings="$TUTOR_VENV/share/jupyter/lab/settings"
     if ! cmp -s "$TUTOR_ROOT/scripts/jupyterlab_overrides.json" "$settings/overrides.json"; then
         mkdir -p "$settings" &&

@@ -249,6 +249,24 @@ def write_latency(artifacts, report: dict) -> None:
     path.write_text(json.dumps(data, indent=2))
 
 
+def test_jupyterlab_asks_a_trainee_nothing(jupyterlab):
+    """The room's JupyterLab settings (scripts/jupyterlab_overrides.json, installed by the
+    README's commands) reach the server as its defaults: no news or update pop-ups, and a
+    notebook without a kernel starts the preferred one instead of asking "Select
+    Kernel"."""
+    url, token = jupyterlab
+    defaults = {}
+    for plugin in ("notebook-extension:tracker", "apputils-extension:notification"):
+        with urllib.request.urlopen(
+            f"{url}/lab/api/settings/@jupyterlab/{plugin}?token={token}", timeout=30
+        ) as reply:
+            schema = json.loads(reply.read())["schema"]["properties"]
+        defaults[plugin] = {key: value.get("default") for key, value in schema.items()}
+    assert defaults["notebook-extension:tracker"]["autoStartDefaultKernel"] is True
+    notification = defaults["apputils-extension:notification"]
+    assert notification["fetchNews"] == "false" and notification["checkForUpdates"] is False
+
+
 def test_jupyterlab_draw_demos_and_measure_latency(page, jupyterlab, artifacts):
     url, token = jupyterlab
     open_notebook(page, url, token, artifacts)
