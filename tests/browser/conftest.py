@@ -202,9 +202,6 @@ def browser():
         b.close()
 
 
-#: console errors that are not the page's fault: the browser's own network log lines
-#: (a resource the server answers 404, e.g. a missing favicon or an optional settings
-#: file JupyterLab probes for). Page errors (uncaught exceptions) are never ignored.
 #: Installs, once per viewer page, a record of every clip meshcat's animator loads:
 #: ``[clip time, playing, duration, clips]`` right after the load. Reading the animator
 #: from Playwright takes about a second per call while the software renderer draws, so
@@ -241,6 +238,9 @@ def wait_clip(body, n: int, timeout: float = 30.0) -> list:
     raise AssertionError(f"the viewer loaded {len(clips)} clips within {timeout} s, not {n}")
 
 
+#: console errors that are not the page's fault: the browser's own network log lines
+#: (a resource the server answers 404, e.g. a missing favicon or an optional settings
+#: file JupyterLab probes for). Page errors (uncaught exceptions) are never ignored.
 BENIGN_CONSOLE = ("Failed to load resource",)
 
 

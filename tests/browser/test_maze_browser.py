@@ -171,11 +171,7 @@ def open_notebook(page, url, token, artifacts, name: str = "jupyterlab"):
     page.locator(".jp-Notebook").wait_for(timeout=WIDGET_TIMEOUT_MS)
     idle = ".jp-Notebook-ExecutionIndicator[data-status='idle']"
     page.locator(idle).wait_for(timeout=WIDGET_TIMEOUT_MS)
-    # JupyterLab sometimes asks for a kernel although the session has one: take it
-    select = page.locator(".jp-Dialog").get_by_role("button", name="Select", exact=True)
-    if select.count():
-        select.click()
-        page.locator(idle).wait_for(timeout=WIDGET_TIMEOUT_MS)
+    # a "Select Kernel" question is answered by the page's handler (accept_kernel_dialog)
     page.get_by_role("menuitem", name="Run", exact=True).click()
     page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
     start_and_finish_nf(page, artifacts, name)
