@@ -45,15 +45,27 @@ tests/hub/hubkit.py).
 
 from __future__ import annotations
 
+import grp
 import importlib.util
+import ipaddress
+import json
 import os
 import pwd
+import re
 import shutil
+import stat
 import subprocess
 import sys
 from pathlib import Path
 
+from tutor.errors import InvalidParameterError, SaveError
+from tutor.fileio import write_json
+
 c = get_config()  # noqa: F821 (JupyterHub's config loader provides it)
+
+# the hub, the proxy and every server they start make files for the owner and its group
+# only, whatever umask the hub was started with (the hook's folders have explicit modes)
+os.umask(0o027)
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
@@ -62,6 +74,18 @@ IS_ROOT = os.geteuid() == 0
 CLASS_DIR = Path(os.environ.get("LFD_CLASS_DIR", "/srv/lfd-class"))
 STATE_DIR = Path(os.environ.get("LFD_HUB_STATE_DIR", "/srv/lfd-hub"))
 NOTEBOOKS = Path(os.environ.get("LFD_NOTEBOOKS", str(REPO / "notebooks")))
+#: user and group names the hub accepts (and, as root, makes system accounts of)
+NAME_PATTERN = r"^[a-z][a-z0-9_-]{0,31}$"
+#: the folder modes, set explicitly (never the umask's): the class folder is
+#: root:educators, setgid (what is made in it takes the educators' group); trainees may
+#: pass through it to their own folder but not list it. Each trainee folder is
+#: trainee:educators, setgid: the trainee writes, the educators read, nobody else enters.
+STATE_MODE, CLASS_MODE, TRAINEE_MODE, PARENT_MODE = 0o700, 0o2751, 0o2750, 0o755
+#: the comment (GECOS field) of the system accounts the hub makes: an existing account
+#: without it (``root``, ``backup``, a person's own login) is never given to a trainee
+ACCOUNT_MARK = "lfd-tutor hub trainee"
+#: the hub's record of the trainee folders it made: user name -> [device, inode]
+FOLDER_RECORD = STATE_DIR / "trainee-folders.json"
 #: the folder, in each trainee's home, that holds their copy of the notebooks
 NOTEBOOK_FOLDER = "lfd-notebooks"
 #: the class plan file names the tutor reads (first one found)
@@ -84,29 +108,106 @@ def find_proxy() -> str:
     )
 
 
-def env_number(name: str, default, kind=int):
-    """The environment variable ``name`` as a number of type ``kind`` (else ``default``)."""
+def env_number(name: str, default, kind=int, low=None, high=None):
+    """The environment variable ``name`` as a number of type ``kind`` from ``low`` to
+    ``high`` (else ``default`` when it is unset or blank); anything else stops the hub
+    with a message naming the variable and what it may be."""
     value = os.environ.get(name, "").strip()
     if not value:
         return default
+    what = "a whole number" if kind is int else "a number"
+    allowed = f"{what} from {low} to {high}"
     try:
-        return kind(value)
+        number = kind(value)
     except ValueError:
-        what = "a whole number" if kind is int else "a number"
-        sys.exit(f"lfd-tutor hub kit: {name} is {value!r}; set it to {what}")
+        sys.exit(f"lfd-tutor hub kit: {name} is {value!r}; set it to {allowed}")
+    if not low <= number <= high:  # NaN fails too
+        sys.exit(f"lfd-tutor hub kit: {name} is {value!r}, out of range; set it to {allowed}")
+    return number
+
+
+def env_ip(name: str, default: str) -> str:
+    """The environment variable ``name`` as an IP address (``default`` when unset).
+
+    Set but empty is refused: JupyterHub would take an empty address as every interface.
+    """
+    value = os.environ.get(name)
+    if value is None:
+        return default
+    try:
+        return str(ipaddress.ip_address(value.strip()))
+    except ValueError:
+        sys.exit(
+            f"lfd-tutor hub kit: {name} is {value!r}; set it to an IP address: 127.0.0.1 "
+            "(this machine only) or 0.0.0.0 (every interface, to let the room's laptops in)"
+        )
+
+
+def env_name(name: str, default: str) -> str:
+    """The environment variable ``name`` as a user or group name (``default`` if unset)."""
+    value = os.environ.get(name, default).strip()
+    if not re.fullmatch(NAME_PATTERN, value):
+        sys.exit(
+            f"lfd-tutor hub kit: {name} is {value!r}; set it to a group name of lower-case "
+            "letters, digits, - and _ (starting with a letter, at most 32 characters)"
+        )
+    return value
+
+
+#: the group whose members (the educators' own accounts) read every trainee's folder
+EDUCATORS = env_name("LFD_EDUCATORS_GROUP", "lfd-educators")
+
+
+def open_folder(path: Path) -> int:
+    """A file descriptor of the folder ``path`` itself, never of what a link points at."""
+    return os.open(path, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+
+
+def set_folder(path: Path, mode: int, uid: int = -1, gid: int = -1) -> None:
+    """Give the folder ``path`` (not a link: refused) its owner and exact ``mode``."""
+    try:
+        fd = open_folder(path)
+    except OSError as exc:
+        raise SaveError(
+            f"{path} is not a folder the hub can use ({exc.strerror}): it must be a real "
+            "folder, not a link or a file; give the real path or move it aside"
+        ) from exc
+    try:
+        os.fchown(fd, uid, gid)
+        os.fchmod(fd, mode)
+    finally:
+        os.close(fd)
+
+
+def make_folder(path: Path, mode: int, uid: int = -1, gid: int = -1) -> bool:
+    """Make the folder ``path`` (and missing parents, 0755) with exactly ``mode``.
+
+    Returns True when it was made now. ``os.mkdir`` is given 0700 and the mode is set
+    after, so the umask never decides who may enter.
+    """
+    for parent in reversed(path.parents):
+        if not parent.exists():
+            make_folder(parent, PARENT_MODE)
+    try:
+        os.mkdir(path, 0o700)
+        made = True
+    except FileExistsError:
+        made = False
+    set_folder(path, mode, uid, gid)
+    return made
 
 
 # ---------------------------------------------------------------- hub and proxy
 
 try:
-    STATE_DIR.mkdir(parents=True, exist_ok=True)
+    make_folder(STATE_DIR, STATE_MODE)
 except OSError as exc:
     sys.exit(
-        f"lfd-tutor hub kit: cannot make the hub's state folder {STATE_DIR} ({exc.strerror}); "
+        f"lfd-tutor hub kit: cannot make the hub's state folder {STATE_DIR} ({exc}); "
         "run as root or set LFD_HUB_STATE_DIR to a folder you can write to"
     )
-c.JupyterHub.ip = os.environ.get("LFD_HUB_IP", "127.0.0.1")
-c.JupyterHub.port = env_number("LFD_HUB_PORT", 8000)
+c.JupyterHub.ip = env_ip("LFD_HUB_IP", "127.0.0.1")
+c.JupyterHub.port = env_number("LFD_HUB_PORT", 8000, low=1, high=65535)
 c.JupyterHub.hub_ip = "127.0.0.1"
 c.JupyterHub.db_url = f"sqlite:///{STATE_DIR / 'jupyterhub.sqlite'}"
 c.JupyterHub.cookie_secret_file = str(STATE_DIR / "jupyterhub_cookie_secret")
@@ -124,7 +225,7 @@ c.Authenticator.admin_users = {
 # anyone with the room password may log in under a name of their choice
 c.Authenticator.allow_all = True
 # names become folder names (and, as root, system accounts): letters, digits, - and _
-c.Authenticator.username_pattern = r"^[a-z][a-z0-9_-]{0,31}$"
+c.Authenticator.username_pattern = NAME_PATTERN
 
 # ---------------------------------------------------------------- one server per trainee
 
@@ -143,7 +244,7 @@ else:
     c.SimpleLocalProcessSpawner.home_dir_template = str(STATE_DIR / "homes" / "{username}")
 
 c.Spawner.mem_limit = os.environ.get("LFD_MEM_LIMIT", "1G")
-c.Spawner.cpu_limit = env_number("LFD_CPU_LIMIT", 1.0, float)
+c.Spawner.cpu_limit = env_number("LFD_CPU_LIMIT", 1.0, float, low=0.01, high=1024)
 # the single-user server of this very environment (where lfd-tutor is installed)
 c.Spawner.cmd = [str(Path(sys.executable).with_name("jupyterhub-singleuser"))]
 c.Spawner.default_url = "/lab"
@@ -173,47 +274,147 @@ def user_home(spawner) -> Path:
     return Path(pwd.getpwnam(spawner.user.name).pw_dir)
 
 
-def ensure_account(name: str) -> None:
-    """As root, make the system account a local-process server runs as (as TLJH does)."""
-    try:
-        pwd.getpwnam(name)
-    except KeyError:
-        subprocess.run(["useradd", "--create-home", "--shell", "/bin/bash", name], check=True)
-
-
 def switches_users() -> bool:
     """True when servers run as the trainees' own accounts (root, not the simple spawner)."""
     return IS_ROOT and c.JupyterHub.spawner_class != "simple"
 
 
-def own(path: Path, spawner) -> None:
-    """Give ``path`` (and what it holds) to the trainee's account when servers use one."""
-    if switches_users():
-        account = pwd.getpwnam(spawner.user.name)
-        for sub in (path, *path.rglob("*")):
-            os.chown(sub, account.pw_uid, account.pw_gid)
+def run_tool(command: list[str]) -> None:
+    """Run ``useradd``, ``groupadd`` or ``usermod``; a failure is said in plain words."""
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    if done.returncode:
+        raise SaveError(
+            f"the hub could not run {' '.join(command)!r}: {done.stderr.strip()}; the "
+            "server was not started"
+        )
+
+
+def ensure_group(name: str) -> int:
+    """As root, the educators' group id (the group is made if missing)."""
+    try:
+        return grp.getgrnam(name).gr_gid
+    except KeyError:
+        run_tool(["groupadd", name])
+        return grp.getgrnam(name).gr_gid
+
+
+def ensure_account(name: str, educator: bool) -> pwd.struct_passwd:
+    """As root, the system account a local-process server runs as (made, as TLJH does).
+
+    An account the hub made carries :data:`ACCOUNT_MARK` as its comment. Any other
+    account of that name (``root``, ``backup``, a person's own login) is refused, except
+    for an educator (a hub admin, who logs in with the admin password): their own
+    account is used. Educators are put in the educators' group.
+    """
+    if name == EDUCATORS:
+        raise InvalidParameterError(
+            f"the user name {name!r} is the educators' group's name: log in under another name"
+        )
+    try:
+        account = pwd.getpwnam(name)
+    except KeyError:
+        run_tool(["useradd", "--create-home", "--shell", "/bin/bash", "--comment",
+                  ACCOUNT_MARK, name])
+        account = pwd.getpwnam(name)
+    if account.pw_gecos != ACCOUNT_MARK and not educator:
+        raise InvalidParameterError(
+            f"the user name {name!r} is an account of this machine that the hub did not "
+            "make for a trainee: log in under another name"
+        )
+    if educator and name not in grp.getgrnam(EDUCATORS).gr_mem:
+        run_tool(["usermod", "--append", "--groups", EDUCATORS, name])
+    return account
+
+
+def give(path: Path, uid: int, gid: int) -> None:
+    """Give ``path`` and what it holds to ``uid``:``gid``, never through a link.
+
+    The walk holds each folder open (``os.fwalk``, which does not enter a link, even one
+    swapped in while it walks) and changes each entry relative to it without following
+    it. Links are left as they are (not removed, their owner unchanged); a file with more
+    than one hard link (perhaps a link to a file elsewhere) is left too.
+    """
+    fd = open_folder(path)
+    try:
+        os.fchown(fd, uid, gid)
+    finally:
+        os.close(fd)
+    for _, dirnames, filenames, dirfd in os.fwalk(path, follow_symlinks=False):
+        for name in dirnames + filenames:
+            info = os.stat(name, dir_fd=dirfd, follow_symlinks=False)
+            if stat.S_ISLNK(info.st_mode):
+                continue
+            if not stat.S_ISDIR(info.st_mode) and info.st_nlink > 1:
+                continue
+            os.chown(name, uid, gid, dir_fd=dirfd, follow_symlinks=False)
+
+
+def read_record() -> dict:
+    """The hub's record of the trainee folders it made (:data:`FOLDER_RECORD`)."""
+    try:
+        return json.loads(FOLDER_RECORD.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return {}
+    except (OSError, ValueError) as exc:
+        raise SaveError(
+            f"the hub's record of trainee folders {FOLDER_RECORD} cannot be read ({exc}): "
+            "restore it from a backup, or remove it and move the trainee folders aside"
+        ) from exc
+
+
+def claim_folder(name: str, uid: int, gid: int) -> Path:
+    """The trainee's folder ``<class folder>/<name>``: made now, or one the hub made for
+    this trainee before; any other folder of that name is refused, untouched.
+
+    "Made by the hub for this trainee" means: the hub's record (in its state folder,
+    which only the hub's user can write) holds the folder's device and inode under this
+    name and, when servers run as the trainees' accounts, the folder belongs to the
+    trainee's account. Trainees cannot make folders in the class folder.
+    """
+    folder = CLASS_DIR / name
+    record = read_record()
+    try:
+        os.mkdir(folder, 0o700)
+    except FileExistsError:
+        info = os.lstat(folder)
+        mine = record.get(name) == [info.st_dev, info.st_ino] and stat.S_ISDIR(info.st_mode)
+        if not mine or (uid != -1 and info.st_uid != uid):
+            raise InvalidParameterError(
+                f"the user name {name!r} is taken: {folder} is a folder the hub did not make "
+                "for this trainee. Log in under another name (the educator may move that "
+                "folder aside)"
+            ) from None
+    set_folder(folder, TRAINEE_MODE, uid, gid)
+    info = os.lstat(folder)
+    if record.get(name) != [info.st_dev, info.st_ino]:
+        write_json(FOLDER_RECORD, {**record, name: [info.st_dev, info.st_ino]})
+    return folder
 
 
 def pre_spawn_hook(spawner) -> None:
     """Before a server starts: its account, class folder, notebooks and class plan."""
+    name, educator = spawner.user.name, bool(spawner.user.admin)
+    uid = gid = group = -1
     if switches_users():
-        ensure_account(spawner.user.name)
-    CLASS_DIR.mkdir(parents=True, exist_ok=True)
-    folder = trainee_folder(spawner)
-    folder.mkdir(exist_ok=True)
-    folder.chmod(0o750)  # the trainee and the educator (root, or the folder's group) read it
-    own(folder, spawner)
+        group = ensure_group(EDUCATORS)
+        account = ensure_account(name, educator)
+        uid, gid = account.pw_uid, account.pw_gid
+    make_folder(CLASS_DIR, CLASS_MODE, 0 if IS_ROOT else -1, group)
+    folder = claim_folder(name, uid, group)
+    if uid != -1:
+        give(folder, uid, group)
     home = user_home(spawner)
     home.mkdir(parents=True, exist_ok=True)
     notebooks = home / NOTEBOOK_FOLDER
     if not notebooks.exists():  # a trainee's own edits are never overwritten
         shutil.copytree(NOTEBOOKS, notebooks, ignore=shutil.ignore_patterns("sessions"))
-        own(notebooks, spawner)
+        if uid != -1:
+            give(notebooks, uid, gid)
     spawner.notebook_dir = str(notebooks)
     plan = class_plan()
     if plan is not None:  # read when the server starts: a plan written later counts
         spawner.environment = {**spawner.environment, "TUTOR_CLASS_PLAN": str(plan)}
-    if spawner.user.admin:  # the educator's dashboard (notebook 05) reads the whole class
+    if educator:  # the educator's dashboard (notebook 05) reads the whole class
         spawner.environment = {**spawner.environment, "TUTOR_CLASS_DIR": str(CLASS_DIR)}
 
 
@@ -232,7 +433,7 @@ c.JupyterHub.services = [
             sys.executable,
             "-m",
             "jupyterhub_idle_culler",
-            f"--timeout={env_number('LFD_IDLE_TIMEOUT', 3600)}",
+            f"--timeout={env_number('LFD_IDLE_TIMEOUT', 3600, low=1, high=10**7)}",
         ],
     }
 ]

@@ -391,10 +391,16 @@ def _fsync_folder(path: Path) -> None:
         os.close(fd)
 
 
+#: a new file's permissions: its owner writes, its group reads (on the hub kit, the
+#: educators' group, which each trainee folder passes to what is made in it), others nothing
+NEW_FILE_MODE = 0o640
+
+
 def atomic_write_text(path, text: str) -> Path:
     """Write ``text`` to ``path`` atomically as UTF-8; returns the path.
 
-    Missing folders are made. An existing target keeps its permissions.
+    Missing folders are made. An existing target keeps its permissions; a new one gets
+    :data:`NEW_FILE_MODE`.
 
     Raises
     ------
@@ -427,9 +433,13 @@ def atomic_write_text(path, text: str) -> Path:
         try:
             with os.fdopen(fd, "wb") as fh:
                 try:
-                    os.fchmod(fh.fileno(), stat.S_IMODE(os.stat(path).st_mode))
+                    mode = stat.S_IMODE(os.stat(path).st_mode)
+                except OSError:
+                    mode = NEW_FILE_MODE  # a new file (mkstemp's own mode is 0600)
+                try:
+                    os.fchmod(fh.fileno(), mode)
                 except (OSError, AttributeError):
-                    pass  # a new file, or a platform without fchmod: default permissions
+                    pass  # a platform without fchmod: mkstemp's permissions
                 fh.write(data)
                 fh.flush()
                 os.fsync(fh.fileno())

@@ -158,6 +158,23 @@ class ClassResult:
         return [f for f in self.files if f.kind in PROBLEMS]
 
     @property
+    def unreadable_folders(self) -> list[FileOutcome]:
+        """The trainee folders this account could not read (their runs are unknown)."""
+        return [f for f in self.files if f.kind == "unreadable" and f.file.endswith("/")]
+
+    @property
+    def cannot_read_note(self) -> str:
+        """"You cannot read N trainee folders ..." when there are any, else ""."""
+        n = len(self.unreadable_folders)
+        if not n:
+            return ""
+        folders = "folder" if n == 1 else "folders"
+        return (
+            f"You cannot read {n} trainee {folders} (listed below): their runs are not "
+            "counted. Read the class as root or from an account in the educators' group."
+        )
+
+    @property
     def other_experiment(self) -> list[FileOutcome]:
         return [f for f in self.files if f.kind == "other experiment"]
 
@@ -249,6 +266,29 @@ def _folder_files(root: Path) -> list[str]:
             if not name.startswith(".") and name.lower().endswith(".json"):
                 found.append((Path(dirpath) / name).relative_to(root).as_posix())
     return sorted(found)
+
+
+#: the reason given for a folder of the class that this account cannot read
+CANNOT_READ = (
+    "you cannot read this trainee folder (no permission): its runs are not counted. Read "
+    "the class as root, or from an account in the educators' group (the hub kit's "
+    "lfd-educators)"
+)
+
+
+def _unreadable_folders(root: Path) -> list[FileOutcome]:
+    """One "unreadable" outcome (file ``<folder>/``) per folder under ``root`` that this
+    account may not list: :func:`_folder_files`'s walk passes over them in silence."""
+    blocked = []
+
+    def note(error: OSError) -> None:
+        if isinstance(error, PermissionError):
+            label = Path(error.filename).relative_to(root).as_posix()
+            blocked.append(FileOutcome(f"{label}/", "unreadable", CANNOT_READ))
+
+    for _, dirnames, _ in os.walk(root, onerror=note):
+        dirnames[:] = [d for d in dirnames if not _hidden([d])]
+    return sorted(blocked, key=lambda outcome: outcome.file)
 
 
 def _zip_files(archive: zipfile.ZipFile) -> list[str]:
@@ -484,6 +524,8 @@ def read_class(
         items = [(str(path), is_zip, lab, experiment, settings) for lab in fresh]
         done = pool.map(_read, items, meanwhile)
         outcomes = memo.merge(labels, "file", dict(zip(fresh, done, strict=True)))
+    if not is_zip:
+        outcomes += [(outcome, None, None) for outcome in _unreadable_folders(path)]
     result = _score(path, experiment, outcomes, settings)
     result.roster = roster
     return result

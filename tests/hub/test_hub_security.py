@@ -1,0 +1,365 @@
+"""The hub kit's pre-spawn hook, driven as root in a scratch class folder, and its settings.
+
+deploy/jupyterhub_config.py is executed here as JupyterHub would (``get_config`` given),
+with its folders in a temp folder and its own educators' group, and its pre-spawn hook
+is called with a small stand-in for a spawner. The hook then makes real system accounts
+(``useradd``): every account and group made here is named ``lfdt-...`` and removed at
+the end. What other accounts may read is checked by a forked child that drops root for
+the account's uid, gid and groups (root itself reads everything).
+
+Also here: the class analysis, read from an account that cannot enter a trainee folder
+(mode 000, owned by nobody), says so; and the Zero to JupyterHub values in
+deploy/z2jh-values.yaml isolate trainees.
+"""
+
+from __future__ import annotations
+
+import grp
+import importlib.util
+import json
+import os
+import pwd
+import secrets
+import shutil
+import stat
+import subprocess
+import tempfile
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from tests.hub.hubkit import KIT_CONFIG, REPO
+from tutor.errors import InvalidParameterError
+
+PREFIX = "lfdt-"
+
+
+# ---------------------------------------------------------------- helpers
+
+
+def as_account(uid: int, gid: int, groups, fn):
+    """``fn()`` in a forked child running as ``uid``/``gid`` with ``groups`` (umask 027,
+    as the kit gives servers); returns what it returned, or the exception's name."""
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: never returns into pytest
+        os.close(read)
+        try:
+            os.setgroups(list(groups))
+            os.setgid(gid)
+            os.setuid(uid)
+            os.umask(0o027)
+            out = {"ok": fn()}
+        except BaseException as exc:  # noqa: BLE001 (reported to the parent)
+            out = {"error": type(exc).__name__, "text": str(exc)}
+        with os.fdopen(write, "w") as pipe:
+            json.dump(out, pipe)
+        os._exit(0)
+    os.close(write)
+    with os.fdopen(read) as pipe:
+        text = pipe.read()
+    os.waitpid(pid, 0)
+    return json.loads(text)
+
+
+def as_user(name: str, fn):
+    account = pwd.getpwnam(name)
+    groups = os.getgrouplist(name, account.pw_gid)
+    return as_account(account.pw_uid, account.pw_gid, groups, fn)
+
+
+def mode_of(path: Path) -> int:
+    return stat.S_IMODE(os.lstat(path).st_mode)
+
+
+class Room:
+    """The kit loaded with its folders under ``root``; makes and removes lfdt- accounts."""
+
+    def __init__(self, root: Path, monkeypatch):
+        self.root = root
+        self.tag = secrets.token_hex(3)
+        self.group = f"{PREFIX}edu-{self.tag}"
+        self.class_dir = root / "srv" / "class"
+        self.state_dir = root / "srv" / "state"
+        notebooks = root / "notebooks"
+        notebooks.mkdir()
+        (notebooks / "00_start.ipynb").write_text("{}")
+        for key, value in {
+            "LFD_CLASS_DIR": str(self.class_dir),
+            "LFD_HUB_STATE_DIR": str(self.state_dir),
+            "LFD_NOTEBOOKS": str(notebooks),
+            "LFD_EDUCATORS_GROUP": self.group,
+        }.items():
+            monkeypatch.setenv(key, value)
+        for key in ("LFD_HUB_IP", "LFD_HUB_PORT", "LFD_CPU_LIMIT", "LFD_IDLE_TIMEOUT"):
+            monkeypatch.delenv(key, raising=False)
+        self.names: list[str] = []
+        self.kit = None
+
+    def name(self, who: str) -> str:
+        name = f"{PREFIX}{who}-{self.tag}"
+        self.names.append(name)
+        return name
+
+    def load(self):
+        self.kit = load_kit()
+        assert self.kit.switches_users(), "as root the kit must switch users"
+        return self.kit
+
+    def spawn(self, name: str, admin: bool = False):
+        spawner = SimpleNamespace(
+            user=SimpleNamespace(name=name, admin=admin), environment={}, notebook_dir=""
+        )
+        self.kit.pre_spawn_hook(spawner)
+        return spawner
+
+    def cleanup(self) -> None:
+        for name in self.names:
+            try:
+                pwd.getpwnam(name)
+            except KeyError:
+                continue
+            subprocess.run(["userdel", "--remove", name], capture_output=True, check=False)
+        for name in (self.group, *self.names):
+            try:
+                grp.getgrnam(name)
+            except KeyError:
+                continue
+            subprocess.run(["groupdel", name], capture_output=True, check=False)
+
+
+def load_kit():
+    """Execute deploy/jupyterhub_config.py as JupyterHub's config loader would."""
+    from traitlets.config import Config
+
+    spec = importlib.util.spec_from_file_location("lfd_hub_kit_under_test", KIT_CONFIG)
+    module = importlib.util.module_from_spec(spec)
+    config = Config()
+    module.get_config = lambda: config
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture
+def umask_000():
+    """The hub started under umask 000 (and the test's own umask back afterwards)."""
+    old = os.umask(0)
+    yield
+    os.umask(old)
+
+
+@pytest.fixture
+def scratch():
+    """A scratch folder other accounts may pass through (pytest's tmp_path is in a 0700
+    folder of root's)."""
+    root = Path(tempfile.mkdtemp(prefix=PREFIX, dir="/tmp"))
+    os.chmod(root, 0o755)
+    yield root
+    shutil.rmtree(root, ignore_errors=True)
+
+
+@pytest.fixture
+def room(scratch, monkeypatch, umask_000):
+    made = Room(scratch, monkeypatch)
+    try:
+        yield made
+    finally:
+        made.cleanup()
+
+
+# ---------------------------------------------------------------- the hook
+
+
+def test_umask_000_gives_exact_folder_modes(room):
+    kit = room.load()
+    os.umask(0)  # the kit sets its own umask; the folders' modes must not depend on it
+    trainee = room.name("a")
+    room.spawn(trainee)
+    group = grp.getgrnam(room.group).gr_gid
+    folder = room.class_dir / trainee
+    assert mode_of(room.state_dir) == 0o700
+    assert mode_of(room.class_dir) == 0o2751
+    assert mode_of(folder) == 0o2750
+    assert (os.stat(room.class_dir).st_uid, os.stat(room.class_dir).st_gid) == (0, group)
+    assert (os.stat(folder).st_uid, os.stat(folder).st_gid) == (
+        pwd.getpwnam(trainee).pw_uid,
+        group,
+    )
+    assert pwd.getpwnam(trainee).pw_gecos == kit.ACCOUNT_MARK
+    for where, dirs, files in os.walk(room.root / "srv"):
+        for entry in (where, *(Path(where) / n for n in dirs + files)):
+            assert not mode_of(Path(entry)) & 0o002, f"{entry} is world-writable"
+
+
+def test_a_planted_link_never_changes_the_file_it_points_at(room):
+    room.load()
+    trainee = room.name("b")
+    room.spawn(trainee)
+    folder = room.class_dir / trainee
+    outside = room.root / "outside"
+    outside.mkdir()
+    target = outside / "root-file"
+    target.write_text("root's")
+    os.chmod(target, 0o644)
+    (outside / "inner").mkdir()
+    inner = outside / "inner" / "deep-file"
+    inner.write_text("root's too")
+    # what the trainee plants between two server starts (made here as root)
+    (folder / "innocent.json").symlink_to(target)
+    (folder / "runs").symlink_to(outside / "inner", target_is_directory=True)
+    os.link(target, folder / "hard.json")  # fs.protected_hardlinks stops a trainee, not root
+    (folder / "from-the-educator.json").write_text("{}")  # a real file root put there
+    room.spawn(trainee)
+    for path in (target, inner, outside / "inner"):
+        info = os.stat(path)
+        assert (info.st_uid, info.st_gid) == (0, 0), f"{path} changed owner"
+    assert mode_of(target) == 0o644
+    assert (folder / "innocent.json").is_symlink(), "the link is left where it was"
+    assert os.lstat(folder / "innocent.json").st_uid == 0, "the link itself is not chowned"
+    owner = pwd.getpwnam(trainee).pw_uid
+    assert os.stat(folder / "from-the-educator.json").st_uid == owner
+
+
+def test_a_name_colliding_with_another_folder_is_refused_untouched(room):
+    room.load()
+    room.spawn(room.name("first"))  # the class folder exists
+    name = room.name("backup")
+    planted = room.class_dir / name
+    planted.mkdir()
+    os.chmod(planted, 0o700)
+    (planted / "secret.json").write_text("{}")
+    os.chmod(planted / "secret.json", 0o600)
+    before = {p: (os.lstat(p).st_uid, os.lstat(p).st_gid, mode_of(p))
+              for p in (planted, planted / "secret.json")}
+    with pytest.raises(InvalidParameterError, match="is taken"):
+        room.spawn(name)
+    after = {p: (os.lstat(p).st_uid, os.lstat(p).st_gid, mode_of(p)) for p in before}
+    assert after == before
+
+
+def test_an_account_the_hub_did_not_make_is_refused(room):
+    room.load()
+    existing = room.name("human")
+    subprocess.run(["useradd", "--comment", "a person", existing], check=True)
+    with pytest.raises(InvalidParameterError, match="did not make"):
+        room.spawn(existing)
+    assert not (room.class_dir / existing).exists()
+    with pytest.raises(InvalidParameterError, match="did not make"):
+        room.spawn("root")
+    with pytest.raises(InvalidParameterError, match="educators' group"):
+        room.spawn(room.group)
+
+
+def test_the_educators_group_reads_every_run_and_trainees_read_only_their_own(room):
+    room.load()
+    alice, bob = room.name("alice"), room.name("bob")
+    room.spawn(alice)
+    room.spawn(bob)
+    educator = room.name("teacher")  # the educator's own, non-root account
+    subprocess.run(["useradd", "--groups", room.group, educator], check=True)
+    folder = room.class_dir / alice
+
+    def save_a_run():  # what alice's tutor does: a subfolder, then an atomic write
+        from tutor.fileio import write_json
+
+        write_json(folder / "alice" / "NF.json", {"demos": 3})
+        return oct(stat.S_IMODE(os.stat(folder / "alice" / "NF.json").st_mode))
+
+    assert as_user(alice, save_a_run) == {"ok": "0o640"}
+
+    def read_alices_run():
+        names = sorted(os.listdir(folder))
+        return names, json.loads((folder / "alice" / "NF.json").read_text())
+
+    assert as_user(educator, read_alices_run) == {"ok": [["alice"], {"demos": 3}]}
+    assert as_user(bob, read_alices_run)["error"] == "PermissionError"
+    assert as_user(bob, lambda: os.listdir(room.class_dir))["error"] == "PermissionError"
+    plan = room.class_dir / "plan.csv"
+    plan.write_text("trainee,condition\n")
+    os.chmod(plan, 0o644)
+    assert as_user(bob, lambda: plan.read_text()) == {"ok": "trainee,condition\n"}
+
+
+def test_an_educator_admin_joins_the_educators_group(room):
+    room.load()
+    educator = room.name("admin")
+    spawner = room.spawn(educator, admin=True)
+    assert educator in grp.getgrnam(room.group).gr_mem
+    assert spawner.environment["TUTOR_CLASS_DIR"] == str(room.class_dir)
+
+
+# ---------------------------------------------------------------- the settings
+
+
+@pytest.mark.parametrize(
+    ("variable", "value", "says"),
+    [
+        ("LFD_HUB_PORT", "-1", "from 1 to 65535"),
+        ("LFD_HUB_PORT", "70000", "from 1 to 65535"),
+        ("LFD_HUB_PORT", "abc", "from 1 to 65535"),
+        ("LFD_HUB_IP", "", "IP address"),
+        ("LFD_HUB_IP", "not-an-ip", "IP address"),
+        ("LFD_CPU_LIMIT", "nan", "from 0.01 to 1024"),
+        ("LFD_IDLE_TIMEOUT", "0", "from 1 to"),
+        ("LFD_EDUCATORS_GROUP", "Educators!", "group name"),
+    ],
+)
+def test_bad_settings_stop_the_hub_with_a_message(tmp_path, monkeypatch, variable, value, says):
+    monkeypatch.setenv("LFD_HUB_STATE_DIR", str(tmp_path / "state"))
+    monkeypatch.setenv("LFD_CLASS_DIR", str(tmp_path / "class"))
+    monkeypatch.setenv(variable, value)
+    old = os.umask(0o022)
+    try:
+        with pytest.raises(SystemExit) as stopped:
+            load_kit()
+    finally:
+        os.umask(old)
+    message = str(stopped.value)
+    assert variable in message and says in message, message
+
+
+def test_good_settings_are_taken(tmp_path, monkeypatch):
+    monkeypatch.setenv("LFD_HUB_STATE_DIR", str(tmp_path / "state"))
+    monkeypatch.setenv("LFD_HUB_PORT", "8123")
+    monkeypatch.setenv("LFD_HUB_IP", "0.0.0.0")
+    old = os.umask(0o022)
+    try:
+        kit = load_kit()
+    finally:
+        os.umask(old)
+    assert (kit.c.JupyterHub.port, kit.c.JupyterHub.ip) == (8123, "0.0.0.0")
+
+
+# ---------------------------------------------------------------- the class analysis
+
+
+def test_the_class_analysis_says_which_trainee_folders_it_cannot_read(scratch):
+    from tutor.study.classroom import read_class
+
+    class_dir = scratch / "class"
+    (class_dir / "open" / "someone").mkdir(parents=True)
+    shut = class_dir / "shut"
+    (shut / "someone").mkdir(parents=True)
+    (shut / "someone" / "NF.json").write_text("{}")
+    for path in (class_dir, class_dir / "open", class_dir / "open" / "someone"):
+        os.chmod(path, 0o755)
+    daemon, nobody = pwd.getpwnam("daemon"), pwd.getpwnam("nobody")
+    os.chown(shut, daemon.pw_uid, daemon.pw_gid)  # another account's folder, mode 000
+    os.chmod(shut, 0)
+    read_class(class_dir, experiment=1, workers=1)  # as root: every module is imported
+
+    def read_as_educator():
+        result = read_class(class_dir, experiment=1, workers=1)
+        return [f.file for f in result.unreadable_folders], result.cannot_read_note
+
+    out = as_account(nobody.pw_uid, nobody.pw_gid, [nobody.pw_gid], read_as_educator)
+    assert out["ok"][0] == ["shut/"], out
+    assert "You cannot read 1 trainee folder " in out["ok"][1]
+    # as root every folder is read, and nothing is said
+    assert read_class(class_dir, experiment=1, workers=1).cannot_read_note == ""
+
+
+# ---------------------------------------------------------------- Kubernetes values
+
+VALUES = REPO / "deploy" / "z2jh-values.yaml"
