@@ -27,6 +27,11 @@ What it sets up (deploy/README.md has the how-to):
 - The class folder ``LFD_CLASS_DIR`` (default /srv/lfd-class): each trainee's
   ``TUTOR_SESSION_DIR`` is ``<class folder>/<user name>``, made before their server
   starts, so the educator collects every run with ``lfd-tutor class <class folder>``.
+  As root the class folder is root:``LFD_EDUCATORS_GROUP`` (default lfd-educators) 2751
+  and each trainee folder trainee:educators 2750 (setgid), modes set explicitly whatever
+  the umask: the educators' own accounts read every run, a trainee only their own. The
+  hook never follows a link, and refuses a name whose folder or account the hub did not
+  make for that trainee (see :func:`claim_folder`, :func:`ensure_account`, :func:`give`).
   ``TUTOR_CLASS_PLAN`` points at ``<class folder>/plan.csv`` (or ``plan.json``) when
   the educator wrote one (Experiment 2's conditions). Admins (educators) get
   ``TUTOR_CLASS_DIR`` = the class folder, which notebook 05's dashboard reads.

@@ -336,6 +336,7 @@ def test_good_settings_are_taken(tmp_path, monkeypatch):
 
 def test_the_class_analysis_says_which_trainee_folders_it_cannot_read(scratch):
     from tutor.study.classroom import read_class
+    from tutor.study.dashboard import ClassDashboard
 
     class_dir = scratch / "class"
     (class_dir / "open" / "someone").mkdir(parents=True)
@@ -347,15 +348,21 @@ def test_the_class_analysis_says_which_trainee_folders_it_cannot_read(scratch):
     daemon, nobody = pwd.getpwnam("daemon"), pwd.getpwnam("nobody")
     os.chown(shut, daemon.pw_uid, daemon.pw_gid)  # another account's folder, mode 000
     os.chmod(shut, 0)
-    read_class(class_dir, experiment=1, workers=1)  # as root: every module is imported
+    # as root first, so that every module is imported before the child drops root
+    assert "cannot read" not in ClassDashboard(class_dir, experiment=1).status.value
 
     def read_as_educator():
         result = read_class(class_dir, experiment=1, workers=1)
-        return [f.file for f in result.unreadable_folders], result.cannot_read_note
+        board = ClassDashboard(class_dir, experiment=1)
+        files = [f.file for f in result.unreadable_folders]
+        return files, result.cannot_read_note, board.status.value, board.problems.value
 
     out = as_account(nobody.pw_uid, nobody.pw_gid, [nobody.pw_gid], read_as_educator)
-    assert out["ok"][0] == ["shut/"], out
-    assert "You cannot read 1 trainee folder " in out["ok"][1]
+    files, note, status, problems = out["ok"]
+    assert files == ["shut/"], out
+    assert "You cannot read 1 trainee folder " in note
+    assert "You cannot read 1 trainee folder " in status  # the dashboard says it
+    assert "shut/" in problems and "you cannot read this trainee folder" in problems
     # as root every folder is read, and nothing is said
     assert read_class(class_dir, experiment=1, workers=1).cannot_read_note == ""
 
@@ -363,3 +370,54 @@ def test_the_class_analysis_says_which_trainee_folders_it_cannot_read(scratch):
 # ---------------------------------------------------------------- Kubernetes values
 
 VALUES = REPO / "deploy" / "z2jh-values.yaml"
+
+
+def z2jh_values() -> dict:
+    import yaml
+
+    return yaml.safe_load(VALUES.read_text())
+
+
+def class_mounts(mounts) -> list[dict]:
+    return [m for m in mounts if m["name"] == "lfd-class"]
+
+
+def test_each_trainee_pod_mounts_only_its_own_folder_of_the_class_volume():
+    values = z2jh_values()["singleuser"]
+    mounts = class_mounts(values["storage"]["extraVolumeMounts"])
+    assert mounts, "no mount of the class volume"
+    for mount in mounts:
+        assert "{username}" in mount.get("subPath", ""), f"a trainee mounts the root: {mount}"
+    assert values["extraEnv"]["TUTOR_SESSION_DIR"] == mounts[0]["mountPath"]
+    trainee = [p for p in values["profileList"] if p["slug"] == "trainee"]
+    assert trainee and trainee[0].get("default") is True
+    assert "kubespawner_override" not in trainee[0]
+    # every pod has one uid: the subPath, not file modes, keeps trainees apart
+    assert values["uid"] == 1000 and values["fsGid"] == 100
+
+
+def test_the_educator_profile_reads_the_class_volume_and_only_admins_get_it():
+    values = z2jh_values()
+    educator = next(p for p in values["singleuser"]["profileList"] if p["slug"] == "educator")
+    mounts = class_mounts(educator["kubespawner_override"]["volume_mounts"])
+    assert mounts and all(m.get("readOnly") is True and "subPath" not in m for m in mounts)
+    assert educator["kubespawner_override"]["environment"]["TUTOR_CLASS_DIR"] == (
+        mounts[0]["mountPath"]
+    )
+    # the chart's config as z2jh leaves it before extraConfig: the home mount, then
+    # singleuser.storage.extraVolumeMounts, and singleuser.profileList
+    from traitlets.config import Config
+
+    c = Config()
+    home = {"name": "volume-{user_server}", "mountPath": "/home/jovyan"}
+    c.KubeSpawner.volume_mounts = [home, *values["singleuser"]["storage"]["extraVolumeMounts"]]
+    c.KubeSpawner.profile_list = values["singleuser"]["profileList"]
+    exec(values["hub"]["extraConfig"]["lfd-isolation"], {"c": c})  # noqa: S102
+    offer = c.KubeSpawner.profile_list
+    trainee = SimpleNamespace(user=SimpleNamespace(name="t", admin=False))
+    admin = SimpleNamespace(user=SimpleNamespace(name="e", admin=True))
+    assert [p["slug"] for p in offer(trainee)] == ["trainee"]
+    assert [p["slug"] for p in offer(admin)] == ["trainee", "educator"]
+    got = offer(admin)[1]["kubespawner_override"]["volume_mounts"]
+    assert got[0] == home
+    assert class_mounts(got) == mounts, "the educator must not get a trainee's subPath mount"

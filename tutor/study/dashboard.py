@@ -243,8 +243,8 @@ class ClassDashboard:
         self._say(
             f"<b>{len(result.runs)} runs</b> counted from <b>{n_counted} trainees</b> "
             f"in {html.escape(result.source)}; {len(result.not_counted)} files not "
-            f"counted.{aside} Read at {stamp} in {seconds:.1f} s. "
-            + html.escape(result.cannot_read_note)
+            f"counted.{aside} Read at {stamp} in {seconds:.1f} s."
+            + html.escape(f" {result.cannot_read_note}".rstrip())
         )
         if result.runs.empty:
             self.beside.value = "<p>No finished run of this experiment yet.</p>"
