@@ -180,26 +180,29 @@ def set_folder(path: Path, mode: int, uid: int = -1, gid: int = -1) -> None:
     try:
         os.fchown(fd, uid, gid)
         os.fchmod(fd, mode)
+    except OSError as exc:
+        raise SaveError(
+            f"the hub cannot set the owner and mode of {path} ({exc.strerror}): run it as "
+            "root, or as the folder's owner"
+        ) from exc
     finally:
         os.close(fd)
 
 
-def make_folder(path: Path, mode: int, uid: int = -1, gid: int = -1) -> bool:
+def make_folder(path: Path, mode: int, uid: int = -1, gid: int = -1) -> None:
     """Make the folder ``path`` (and missing parents, 0755) with exactly ``mode``.
 
-    Returns True when it was made now. ``os.mkdir`` is given 0700 and the mode is set
-    after, so the umask never decides who may enter.
+    ``os.mkdir`` is given 0700 and the mode is set after, so the umask never decides who
+    may enter.
     """
     for parent in reversed(path.parents):
         if not parent.exists():
             make_folder(parent, PARENT_MODE)
     try:
         os.mkdir(path, 0o700)
-        made = True
     except FileExistsError:
-        made = False
+        pass
     set_folder(path, mode, uid, gid)
-    return made
 
 
 # ---------------------------------------------------------------- hub and proxy
