@@ -236,6 +236,7 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
             lines.append(f"  {f.file}: {f.kind} — {f.reason}")
     else:
         lines.append("Every run file of this experiment was counted.")
+    lines += [_sentence_case(note) for note in result.notes]
     others = result.other_experiment
     if others:
         other = 2 if exp == 1 else 1
@@ -244,6 +245,10 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
             f"--experiment {other}."
         )
     return "\n".join(lines)
+
+
+def _sentence_case(note: str) -> str:
+    return note[:1].upper() + note[1:] + "."
 
 
 def _class_json(result: ClassResult, analysis: dict) -> dict:

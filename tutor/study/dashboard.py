@@ -244,6 +244,7 @@ class ClassDashboard:
             f"<b>{len(result.runs)} runs</b> counted from <b>{n_counted} trainees</b> "
             f"in {html.escape(result.source)}; {len(result.not_counted)} files not "
             f"counted.{aside} Read at {stamp} in {seconds:.1f} s."
+            + "".join(f" {html.escape(n[:1].upper() + n[1:])}." for n in result.notes)
         )
         if result.runs.empty:
             self.beside.value = "<p>No finished run of this experiment yet.</p>"

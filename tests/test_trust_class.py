@@ -1,0 +1,96 @@
+"""Issue 19 (trust), the educator's side: run ids, name clashes, crashes, caps, CSVs."""
+
+from __future__ import annotations
+
+import json
+import uuid
+
+import pytest
+
+from tutor.errors import InvalidFileError
+from tutor.framework.record import RunRecord, Trainee
+from tutor.runtime import trainee_key
+from tutor.study.class_report import analyse_class, format_class_report
+from tutor.study.classroom import read_class
+from tutor.study.simulated_class import write_simulated_class
+
+
+def _rename_all(folder, name="Ann"):
+    """Every run file under ``folder`` as if its trainee had typed ``name``."""
+    for path in sorted(folder.rglob("*.json")):
+        data = json.loads(path.read_text())
+        data["trainee"] = {"name": name, "key": trainee_key(name)}
+        path.write_text(json.dumps(data))
+
+
+# ---------------------------------------------------------------- run ids
+
+
+def test_a_new_record_has_a_run_id_kept_through_changes_and_files():
+    rec = RunRecord.new(1, "maze", "VF", Trainee.from_name("Zoë"))
+    assert len(rec.run_id) == 32 and int(rec.run_id, 16) >= 0
+    again = RunRecord.from_dict(rec.to_dict())
+    assert again == rec and again.run_id == rec.run_id
+    assert rec.to_dict()["run_id"] == rec.run_id
+    assert RunRecord.new(1, "maze", "VF", rec.trainee).run_id != rec.run_id
+    attempt = rec.current
+    assert rec.with_current(attempt).run_id == rec.run_id
+    event = rec.events[0]
+    assert rec.with_new_attempt(attempt, "reset", event).run_id == rec.run_id
+
+
+def test_run_id_is_read_checked_and_optional():
+    rec = RunRecord.new(1, "maze", "VF", Trainee.from_name("Zoë"))
+    data = rec.to_dict()
+    canonical = str(uuid.UUID(rec.run_id))
+    assert RunRecord.from_dict({**data, "run_id": canonical}).run_id == rec.run_id
+    old = {k: v for k, v in data.items() if k != "run_id"}
+    assert RunRecord.from_dict(old).run_id is None
+    for bad in ("xyz", 12, "0" * 31, True):
+        with pytest.raises(InvalidFileError, match="run_id"):
+            RunRecord.from_dict({**data, "run_id": bad})
+
+
+def test_a_simulated_class_file_on_disk_holds_its_run_id(tmp_path):
+    write_simulated_class(tmp_path, 1, 3, seed=0, workers=1)
+    ids = {json.loads(p.read_text())["run_id"] for p in tmp_path.rglob("*.json")}
+    assert len(ids) == 9 and None not in ids
+
+
+# ---------------------------------------------------------------- same name, other people
+
+
+def test_six_trainees_of_one_name_in_six_folders_count_as_six(tmp_path):
+    write_simulated_class(tmp_path, 1, 6, seed=3, workers=1)
+    _rename_all(tmp_path)
+    result = read_class(tmp_path, 1, workers=1)
+    assert [f.kind for f in result.files] == ["counted"] * 18
+    assert len(result.trainees) == 6
+    assert result.runs.trainee_key.nunique() == 6 and result.runs.teacher.nunique() == 6
+    assert len(result.complete_runs) == 18
+    assert len(result.name_clashes) == 18
+    stats = analyse_class(result)
+    report = format_class_report(result, stats)
+    assert "duplicate" not in report
+    assert "Name clash: 1 name(s) (Ann)" in report
+
+
+def test_a_copied_file_is_a_duplicate_by_its_run_id(tmp_path):
+    write_simulated_class(tmp_path, 1, 3, seed=3, workers=1)
+    a, b, _ = sorted(p for p in tmp_path.iterdir() if p.is_dir())
+    (b / "copy-of-a-NF.json").write_text((a / "NF.json").read_text())
+    result = read_class(tmp_path, 1, workers=1)
+    kinds = {f.file: f.kind for f in result.files}
+    assert kinds[f"{b.name}/copy-of-a-NF.json"] == "duplicate"
+    assert len(result.trainees) == 3 and not result.name_clashes
+
+
+def test_old_records_without_a_run_id_are_judged_as_before_and_said(tmp_path):
+    write_simulated_class(tmp_path, 1, 3, seed=3, workers=1)
+    for path in tmp_path.rglob("*.json"):
+        data = json.loads(path.read_text())
+        data.pop("run_id")
+        path.write_text(json.dumps(data))
+    result = read_class(tmp_path, 1, workers=1)
+    assert result.old_runs == 9
+    assert "9 old runs without a run id" in format_class_report(result, analyse_class(result))
