@@ -94,3 +94,49 @@ def test_old_records_without_a_run_id_are_judged_as_before_and_said(tmp_path):
     result = read_class(tmp_path, 1, workers=1)
     assert result.old_runs == 9
     assert "9 old runs without a run id" in format_class_report(result, analyse_class(result))
+
+
+# ---------------------------------------------------------------- spreadsheets and the board
+
+
+def test_csv_cells_that_could_start_a_formula_are_escaped_numbers_stay(tmp_path):
+    import pandas as pd
+
+    from tutor.study.class_report import save_class
+
+    write_simulated_class(tmp_path / "class", 1, 3, seed=3, workers=1)
+    _rename_all(tmp_path / "class", "=HYPERLINK(1)")
+    result = read_class(tmp_path / "class", 1, workers=1)
+    paths = save_class(result, analyse_class(result), tmp_path / "out", figures=False)
+    for kind in ("runs", "demos", "files"):
+        text = paths[kind].read_text()
+        assert "'=HYPERLINK(1)" in text and ",=HYPERLINK" not in text, kind
+    runs = pd.read_csv(paths["runs"])
+    assert pd.api.types.is_numeric_dtype(runs.eta)
+
+
+def test_spreadsheet_safe_escapes_text_only():
+    from tutor.study.class_report import spreadsheet_safe
+
+    for text in ("=1", "+1", "-1", "@x", "\tx", "\rx"):
+        assert spreadsheet_safe(text) == "'" + text
+    assert spreadsheet_safe(-1.5) == -1.5 and spreadsheet_safe("Ann") == "Ann"
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"experiment": 3},
+        {"experiment": True},
+        {"refresh_seconds": float("nan")},
+        {"refresh_seconds": 5},
+        {"refresh_seconds": 30.5},
+        {"refresh_seconds": "30"},
+    ],
+)
+def test_the_dashboard_refuses_bad_options_naming_the_allowed(tmp_path, options):
+    from tutor.errors import InvalidParameterError
+    from tutor.study.dashboard import class_dashboard
+
+    with pytest.raises(InvalidParameterError, match="must be"):
+        class_dashboard(tmp_path, **options)

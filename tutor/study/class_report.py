@@ -294,6 +294,33 @@ def class_figure(result: ClassResult, analysis: dict):
     return draw(result.runs, who="trainees", reference=analysis["simulated"]["runs"])
 
 
+#: what a spreadsheet reads as the start of a formula (OWASP, CSV injection)
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def spreadsheet_safe(value):
+    """``value`` as a CSV cell a spreadsheet will not run: a text starting a formula gets
+    a leading ``'``; numbers (negative ones too) stay numbers.
+
+    >>> spreadsheet_safe("=1+1"), spreadsheet_safe("-x"), spreadsheet_safe(-2.5)
+    ("'=1+1", "'-x", -2.5)
+    """
+    if isinstance(value, str) and value.startswith(FORMULA_STARTS):
+        return "'" + value
+    return value
+
+
+def write_csv(frame: pd.DataFrame, path) -> None:
+    """Write ``frame`` as a CSV an educator may open in a spreadsheet: every text cell
+    (and column name) made :func:`spreadsheet_safe`."""
+    safe = frame.copy()
+    for column in safe.columns:
+        if not pd.api.types.is_numeric_dtype(safe[column]):
+            safe[column] = safe[column].map(spreadsheet_safe)
+    safe.columns = [spreadsheet_safe(str(c)) for c in safe.columns]
+    safe.to_csv(path, index=False)
+
+
 def save_class(result: ClassResult, analysis: dict, out, figures: bool = True) -> dict:
     """Write ``class_runs.csv``, ``class_demos.csv``, ``class_files.csv``, ``class.json``,
     ``class_report.txt`` and (``figures``, with runs) ``class_experiment<N>.png``.
@@ -318,9 +345,9 @@ def save_class(result: ClassResult, analysis: dict, out, figures: bool = True) -
         "report": out / "class_report.txt",
     }
     try:
-        result.runs.to_csv(paths["runs"], index=False)
-        result.demos.to_csv(paths["demos"], index=False)
-        pd.DataFrame([f.to_dict() for f in result.files]).to_csv(paths["files"], index=False)
+        write_csv(result.runs, paths["runs"])
+        write_csv(result.demos, paths["demos"])
+        write_csv(pd.DataFrame([f.to_dict() for f in result.files]), paths["files"])
         text = json.dumps(_class_json(result, analysis), indent=2, default=str)
         Path(paths["summary"]).write_text(text, encoding="utf-8")
         paths["report"].write_text(format_class_report(result, analysis) + "\n", "utf-8")
