@@ -140,3 +140,39 @@ def test_the_dashboard_refuses_bad_options_naming_the_allowed(tmp_path, options)
 
     with pytest.raises(InvalidParameterError, match="must be"):
         class_dashboard(tmp_path, **options)
+
+
+# ---------------------------------------------------------------- crashes
+
+
+def test_a_finished_pickplace_run_without_demonstrations_is_not_counted_with_a_reason(tmp_path):
+    write_simulated_class(tmp_path, 2, 8, seed=0, workers=1)
+    path = sorted(tmp_path.rglob("*.json"))[0]
+    data = json.loads(path.read_text())
+    data["attempts"][-1].update(demos=[], undone=[], tests=[])
+    data["events"] = [e for e in data["events"] if e["kind"] in ("start", "finish")]
+    for event in data["events"]:
+        event["n_demos"] = 0
+    path.write_text(json.dumps(data))
+    result = read_class(tmp_path, 2, workers=1)
+    empty = [f for f in result.files if f.file == path.relative_to(tmp_path).as_posix()][0]
+    assert empty.kind == "no demonstrations" and "η" in empty.reason
+    format_class_report(result, analyse_class(result))
+
+
+def test_runs_that_all_hold_the_same_demonstrations_are_reported_not_crashed(tmp_path):
+    from tutor.study.dashboard import ClassDashboard
+
+    write_simulated_class(tmp_path, 1, 3, seed=0, workers=1)
+    files = sorted(tmp_path.rglob("*.json"))
+    source = json.loads(files[0].read_text())
+    for path in files:
+        data = json.loads(path.read_text())
+        data.update(attempts=source["attempts"], events=source["events"])
+        path.write_text(json.dumps(data))
+    result = read_class(tmp_path, 1, workers=1)
+    analysis = analyse_class(result)
+    assert not analysis["class"]["tested"]
+    assert "the same η" in format_class_report(result, analysis)
+    board = ClassDashboard(tmp_path, 1)
+    assert "the same η" in board.tests.value

@@ -122,6 +122,12 @@ def same_size_cohort(class_runs: pd.DataFrame, experiment: int, seed: int = 0) -
 def _tests(runs: pd.DataFrame, experiment: int) -> dict:
     """The paper's statistics on whole trainees' runs, or why there are none."""
     why = too_small(runs, experiment)
+    if not why and runs["eta"].nunique() < 2:
+        why = (
+            f"every counted run has the same η ({100 * runs['eta'].iloc[0]:.1f} %): the "
+            "tests compare differences and there are none (do the runs all hold the same "
+            "demonstrations?)"
+        )
     if why:
         return {"tested": False, "why_not": why}
     st = stats.experiment1_stats(runs) if experiment == 1 else stats.experiment2_stats(runs)

@@ -61,6 +61,7 @@ PROBLEMS = (
     "duplicate",
     "practice",
     "unfinished",
+    "no demonstrations",
 )
 
 
@@ -425,6 +426,12 @@ def _replay(item):
             "pressed Finish, so it is not counted yet"
         )
         return label, "unfinished", reason, None, []
+    if not run.n_demos:
+        reason = (
+            "finished with no demonstration: its η (final ε / demonstrations) is not "
+            "defined, so it is not counted; ask the trainee to teach the run again"
+        )
+        return label, "no demonstrations", reason, None, []
     base = {"condition": record.condition, "run": record.run}
     row, demo_rows = rows_of(run, base, settings)
     return label, "counted", "", row, demo_rows
