@@ -176,3 +176,21 @@ def test_runs_that_all_hold_the_same_demonstrations_are_reported_not_crashed(tmp
     assert "the same η" in format_class_report(result, analysis)
     board = ClassDashboard(tmp_path, 1)
     assert "the same η" in board.tests.value
+
+
+# ---------------------------------------------------------------- workers
+
+
+def test_too_many_workers_are_clamped_with_a_message(monkeypatch, capsys):
+    import resource
+
+    from tutor import workers
+
+    monkeypatch.setattr(resource, "getrlimit", lambda _: (3, 3))
+    assert workers.max_workers() == min(2, workers._cores())
+    pool = workers.process_pool(10_000)
+    try:
+        assert pool._max_workers == workers.max_workers()
+    finally:
+        pool.shutdown()
+    assert "not 10000" in capsys.readouterr().err
