@@ -194,3 +194,33 @@ def test_too_many_workers_are_clamped_with_a_message(monkeypatch, capsys):
     finally:
         pool.shutdown()
     assert "not 10000" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- the dashboard's words
+
+
+def test_the_dashboard_says_1_trainee_and_the_simulated_class_count_it_writes(
+    tmp_path, monkeypatch
+):
+    import shutil
+
+    from tutor.study import simulated_class
+    from tutor.study.dashboard import ClassDashboard
+
+    write_simulated_class(tmp_path, 1, 3, seed=0, workers=1)
+    for folder in sorted(p for p in tmp_path.iterdir() if p.is_dir())[1:]:
+        shutil.rmtree(folder)
+    board = ClassDashboard(tmp_path, 1)
+    assert "<b>1 trainee</b>" in board.status.value and "1 trainees" not in board.status.value
+    said = []
+
+    def fake(folder, experiment, n, **_):
+        said.append((board.status.value, n))
+        raise SystemExit  # stop before the slow writing
+
+    monkeypatch.setattr(simulated_class, "write_simulated_class", fake)
+    board.experiment.value = 2
+    with pytest.raises(SystemExit):
+        board.rehearse()
+    status, n = said[0]
+    assert n == 36 and "(36 trainees)" in status

@@ -76,6 +76,11 @@ def _list(items: list[str], empty: str) -> str:
     return "<ul>" + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
 
 
+def plural(n: int, word: str) -> str:
+    """E.g. "1 trainee", "36 trainees"."""
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+
+
 def check_board_options(experiment, refresh_seconds):
     """(experiment, refresh_seconds) checked: 1 or 2, and None or whole seconds in
     :data:`REFRESH_RANGE` (raises InvalidParameterError naming the allowed values)."""
@@ -267,7 +272,8 @@ class ClassDashboard:
             else ""
         )
         self._say(
-            f"<b>{len(result.runs)} runs</b> counted from <b>{n_counted} trainees</b> "
+            f"<b>{plural(len(result.runs), 'run')}</b> counted from "
+            f"<b>{plural(n_counted, 'trainee')}</b> "
             f"in {html.escape(result.source)}; {len(result.not_counted)} files not "
             f"counted.{aside} Read at {stamp} in {seconds:.1f} s."
             + "".join(f" {html.escape(n[:1].upper() + n[1:])}." for n in result.notes)
@@ -390,9 +396,9 @@ class ClassDashboard:
         from .simulated_class import write_simulated_class
 
         folder = Path(tempfile.mkdtemp(prefix="lfd-simulated-class-")) / "class"
-        self._say("Writing a simulated class (30 trainees)…")
-        write_simulated_class(folder, self.experiment.value, n if self.experiment.value == 1
-                              else 36, seed=1, unfinished=2, damaged=3)
+        n = n if self.experiment.value == 1 else 36  # Experiment 2: 4 conditions of 9
+        self._say(f"Writing a simulated class ({plural(n, 'trainee')})…")
+        write_simulated_class(folder, self.experiment.value, n, seed=1, unfinished=2, damaged=3)
         self._rehearsing = True  # one read, not one for the new folder and one here
         try:
             self.folder.value = str(folder)
