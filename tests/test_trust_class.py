@@ -224,3 +224,15 @@ def test_the_dashboard_says_1_trainee_and_the_simulated_class_count_it_writes(
         board.rehearse()
     status, n = said[0]
     assert n == 36 and "(36 trainees)" in status
+
+
+def test_a_link_to_a_run_outside_the_class_folder_is_not_counted(tmp_path):
+    write_simulated_class(tmp_path / "class", 1, 3, seed=0, workers=1)
+    write_simulated_class(tmp_path / "elsewhere", 1, 3, seed=5, workers=1)
+    outside = sorted((tmp_path / "elsewhere").rglob("NF.json"))[0]
+    home = sorted(p for p in (tmp_path / "class").iterdir() if p.is_dir())[0]
+    (home / "linked.json").symlink_to(outside)
+    result = read_class(tmp_path / "class", 1, workers=1)
+    linked = [f for f in result.files if f.file.endswith("linked.json")][0]
+    assert not linked.counted and "outside the class folder" in linked.reason
+    assert len(result.runs) == 9

@@ -337,6 +337,9 @@ def _read(item):
         outcome, record = _check(label, lambda: _read_member(source, label), experiment)
     else:
         where = Path(source) / label
+        if not where.resolve().is_relative_to(Path(source).resolve()):
+            reason = "a link to a file outside the class folder: links out are not followed"
+            return FileOutcome(label, "unreadable", f"{reason}. {ASK_AGAIN}"), None, None
         outcome, record = _check(label, lambda: read_json(where, "run file"), experiment)
     if record is None:
         return outcome, None, None
