@@ -189,7 +189,7 @@ def test_cli_refuses_a_missing_folder_in_one_line(tmp_path):
 def test_problem_kinds_are_named_in_plain_words():
     assert set(PROBLEMS) == {
         "unreadable", "not a run record", "cannot be replayed", "duplicate", "practice",
-        "unfinished",
+        "unfinished", "no demonstrations",
     }
 
 

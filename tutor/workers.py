@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import sys
 from concurrent.futures import ProcessPoolExecutor
 
-__all__ = ["can_fork", "one_blas_thread", "init_worker", "process_pool"]
+__all__ = ["can_fork", "one_blas_thread", "init_worker", "max_workers", "process_pool"]
 
 _THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -44,7 +45,43 @@ def init_worker() -> None:
     one_blas_thread()
 
 
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def _process_limit() -> int | None:
+    """The processes this user may start (RLIMIT_NPROC's soft limit), None if unlimited."""
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_NPROC)
+    except (ImportError, AttributeError, OSError, ValueError):  # pragma: no cover
+        return None
+    return None if soft == resource.RLIM_INFINITY else int(soft)
+
+
+def max_workers() -> int:
+    """The most worker processes worth starting here: the cores this process may run on,
+    and fewer than the processes the user may start (RLIMIT_NPROC)."""
+    limit = _process_limit()
+    most = _cores() if limit is None else min(_cores(), limit - 1)
+    return max(1, most)
+
+
 def process_pool(workers: int) -> ProcessPoolExecutor:
-    """A pool of ``workers`` processes started by :func:`init_worker` (fork if possible)."""
+    """A pool of ``workers`` processes started by :func:`init_worker` (fork if possible);
+    more than :func:`max_workers` are clamped to it, with a message (never a hang on
+    processes the system will not start)."""
+    most = max_workers()
+    if workers > most:
+        print(
+            f"Using {most} worker processes, not {workers}: this machine lets this process "
+            f"use {_cores()} cores (and {_process_limit() or 'unlimited'} processes).",
+            file=sys.stderr,
+        )
+        workers = most
     ctx = mp.get_context("fork" if can_fork() else "spawn")
     return ProcessPoolExecutor(workers, mp_context=ctx, initializer=init_worker)

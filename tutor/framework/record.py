@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import re
+import uuid
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 
@@ -55,6 +56,7 @@ __all__ = [
 RECORD_FORMAT = "lfd-tutor-run"
 #: a trainee's folder key (see :func:`tutor.runtime.trainee_key`)
 _KEY = re.compile(r"[a-z0-9][a-z0-9-]{0,63}")
+RUN_ID = re.compile(r"[0-9a-fA-F]{32}|[0-9a-fA-F]{8}(-[0-9a-fA-F]{4}){3}-[0-9a-fA-F]{12}")
 RECORD_VERSION = 1
 SUPPORTED_VERSIONS = (1,)
 
@@ -165,6 +167,15 @@ def _stamp(value, path: str) -> str:
     except ValueError:
         _fail(path, f"must be a date and time like 2026-12-01T09:14:03.123Z, got {text!r}")
     return text
+
+
+def _run_id(value, path: str) -> str | None:
+    """A run id: 32 hex digits or a canonical UUID string (None: an old record without one)."""
+    if value is None:
+        return None
+    if isinstance(value, str) and RUN_ID.fullmatch(value):
+        return value.replace("-", "").lower()
+    _fail(path, f"must be 32 hex digits or a UUID like {uuid.UUID(int=0)}, found {value!r}")
 
 
 def record_start(attempts: list):
@@ -433,6 +444,7 @@ class RunRecord:
     practice: bool = False
     tool_version: str = field(default_factory=tool_version)
     created: str = field(default_factory=utc_now)
+    run_id: str | None = None
 
     @classmethod
     def new(
@@ -457,6 +469,7 @@ class RunRecord:
             run=run,
             practice=practice,
             created=at,
+            run_id=uuid.uuid4().hex,
         )
 
     # ------------------------------------------------------------ reading
@@ -518,6 +531,7 @@ class RunRecord:
             "trainee": self.trainee.to_dict(),
             "tool_version": self.tool_version,
             "created": self.created,
+            "run_id": self.run_id,
             "attempts": [a.to_dict() for a in self.attempts],
             "events": [e.to_dict() for e in self.events],
         }
@@ -557,7 +571,7 @@ class RunRecord:
                 "attempts",
                 "events",
             ),
-            ("run", "practice", "tool_version", "created"),
+            ("run", "practice", "tool_version", "created", "run_id"),
         )
         attempts = _list(d["attempts"], "attempts")
         if not attempts:
@@ -576,6 +590,7 @@ class RunRecord:
             practice=_bool(d.get("practice", False), "practice"),
             tool_version=_str(d.get("tool_version", ""), "tool_version"),
             created=_stamp(d.get("created", record_start(attempts)), "created"),
+            run_id=_run_id(d.get("run_id"), "run_id"),
         )
         for i, e in enumerate(record.events):
             if e.attempt >= len(record.attempts):

@@ -122,6 +122,12 @@ def same_size_cohort(class_runs: pd.DataFrame, experiment: int, seed: int = 0) -
 def _tests(runs: pd.DataFrame, experiment: int) -> dict:
     """The paper's statistics on whole trainees' runs, or why there are none."""
     why = too_small(runs, experiment)
+    if not why and runs["eta"].nunique() < 2:
+        why = (
+            f"every counted run has the same η ({100 * runs['eta'].iloc[0]:.1f} %): the "
+            "tests compare differences and there are none (do the runs all hold the same "
+            "demonstrations?)"
+        )
     if why:
         return {"tested": False, "why_not": why}
     st = stats.experiment1_stats(runs) if experiment == 1 else stats.experiment2_stats(runs)
@@ -236,6 +242,7 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
             lines.append(f"  {f.file}: {f.kind} — {f.reason}")
     else:
         lines.append("Every run file of this experiment was counted.")
+    lines += [_sentence_case(note) for note in result.notes]
     others = result.other_experiment
     if others:
         other = 2 if exp == 1 else 1
@@ -244,6 +251,10 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
             f"--experiment {other}."
         )
     return "\n".join(lines)
+
+
+def _sentence_case(note: str) -> str:
+    return note[:1].upper() + note[1:] + "."
 
 
 def _class_json(result: ClassResult, analysis: dict) -> dict:
@@ -289,6 +300,33 @@ def class_figure(result: ClassResult, analysis: dict):
     return draw(result.runs, who="trainees", reference=analysis["simulated"]["runs"])
 
 
+#: what a spreadsheet reads as the start of a formula (OWASP, CSV injection)
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def spreadsheet_safe(value):
+    """``value`` as a CSV cell a spreadsheet will not run: a text starting a formula gets
+    a leading ``'``; numbers (negative ones too) stay numbers.
+
+    >>> spreadsheet_safe("=1+1"), spreadsheet_safe("-x"), spreadsheet_safe(-2.5)
+    ("'=1+1", "'-x", -2.5)
+    """
+    if isinstance(value, str) and value.startswith(FORMULA_STARTS):
+        return "'" + value
+    return value
+
+
+def write_csv(frame: pd.DataFrame, path) -> None:
+    """Write ``frame`` as a CSV an educator may open in a spreadsheet: every text cell
+    (and column name) made :func:`spreadsheet_safe`."""
+    safe = frame.copy()
+    for column in safe.columns:
+        if not pd.api.types.is_numeric_dtype(safe[column]):
+            safe[column] = safe[column].map(spreadsheet_safe)
+    safe.columns = [spreadsheet_safe(str(c)) for c in safe.columns]
+    safe.to_csv(path, index=False)
+
+
 def save_class(result: ClassResult, analysis: dict, out, figures: bool = True) -> dict:
     """Write ``class_runs.csv``, ``class_demos.csv``, ``class_files.csv``, ``class.json``,
     ``class_report.txt`` and (``figures``, with runs) ``class_experiment<N>.png``.
@@ -313,9 +351,9 @@ def save_class(result: ClassResult, analysis: dict, out, figures: bool = True) -
         "report": out / "class_report.txt",
     }
     try:
-        result.runs.to_csv(paths["runs"], index=False)
-        result.demos.to_csv(paths["demos"], index=False)
-        pd.DataFrame([f.to_dict() for f in result.files]).to_csv(paths["files"], index=False)
+        write_csv(result.runs, paths["runs"])
+        write_csv(result.demos, paths["demos"])
+        write_csv(pd.DataFrame([f.to_dict() for f in result.files]), paths["files"])
         text = json.dumps(_class_json(result, analysis), indent=2, default=str)
         Path(paths["summary"]).write_text(text, encoding="utf-8")
         paths["report"].write_text(format_class_report(result, analysis) + "\n", "utf-8")

@@ -61,6 +61,7 @@ PROBLEMS = (
     "duplicate",
     "practice",
     "unfinished",
+    "no demonstrations",
 )
 
 
@@ -151,6 +152,40 @@ class ClassResult:
     #: the class plan's trainees (folder key -> (name, Experiment 2 condition or "")), when
     #: a plan was given: those without a file are listed as missing
     roster: dict = field(default_factory=dict)
+    #: runs read from old records without a run id (copies judged by trainee, condition
+    #: and run number, as before run ids)
+    old_runs: int = 0
+
+    @property
+    def old_runs_note(self) -> str:
+        """E.g. "2 old runs without a run id: duplicates judged by name, condition and
+        run", or "" when every record has an id."""
+        if not self.old_runs:
+            return ""
+        runs = "1 old run" if self.old_runs == 1 else f"{self.old_runs} old runs"
+        return f"{runs} without a run id: duplicates judged by name, condition and run"
+
+    @property
+    def name_clashes(self) -> list[FileOutcome]:
+        """The counted files whose trainee shares a name with a trainee in another folder."""
+        return [f for f in self.files if f.counted and "@" in f.trainee_key]
+
+    @property
+    def notes(self) -> list[str]:
+        """What the educator should know about how files were told apart (name clashes,
+        old records without a run id), one sentence each."""
+        notes = []
+        clashing = sorted({f.trainee_key.split("@")[0] for f in self.name_clashes})
+        if clashing:
+            names = sorted({f.trainee.rsplit(" (", 1)[0] for f in self.name_clashes})
+            notes.append(
+                f"name clash: {len(clashing)} name(s) ({', '.join(names)}) typed by "
+                "different trainees in different folders, with different runs; each is "
+                "counted as its own trainee, told apart by the folder"
+            )
+        if self.old_runs_note:
+            notes.append(self.old_runs_note)
+        return notes
 
     @property
     def not_counted(self) -> list[FileOutcome]:
@@ -328,6 +363,7 @@ class _Meta:
     latest: str
     label: str
     name: str
+    run_id: str | None = None
 
 
 def _read(item):
@@ -341,6 +377,9 @@ def _read(item):
         outcome, record = _check(label, lambda: _read_member(source, label), experiment)
     else:
         where = Path(source) / label
+        if not where.resolve().is_relative_to(Path(source).resolve()):
+            reason = "a link to a file outside the class folder: links out are not followed"
+            return FileOutcome(label, "unreadable", f"{reason}. {ASK_AGAIN}"), None, None
         outcome, record = _check(label, lambda: read_json(where, "run file"), experiment)
     if record is None:
         return outcome, None, None
@@ -350,6 +389,7 @@ def _read(item):
         _latest(record),
         record.label,
         record.trainee.name,
+        record.run_id,
     )
     return outcome, meta, _replay((label, record, experiment, settings))[1:]
 
@@ -429,6 +469,12 @@ def _replay(item):
             "pressed Finish, so it is not counted yet"
         )
         return label, "unfinished", reason, None, []
+    if not run.n_demos:
+        reason = (
+            "finished with no demonstration: its η (final ε / demonstrations) is not "
+            "defined, so it is not counted; ask the trainee to teach the run again"
+        )
+        return label, "no demonstrations", reason, None, []
     base = {"condition": record.condition, "run": record.run}
     row, demo_rows = rows_of(run, base, settings)
     return label, "counted", "", row, demo_rows
@@ -610,37 +656,79 @@ class _Pool:
             self._pool.shutdown()
 
 
-def _duplicates(outcomes) -> dict[str, str]:
-    """label -> the label of the file counted instead, for files repeating a run."""
+def _folder(label: str) -> str:
+    return PurePosixPath(label).parent.as_posix()
+
+
+def _best(members):
+    """The copy to count: the finished one, then the one changed last, then the shorter
+    name (NF.json before the NF-2.json the tutor saves beside it)."""
+    return max(members, key=lambda m: (m[1].finished, m[1].latest, -len(m[0].file)))
+
+
+def _duplicates(outcomes) -> tuple[dict[str, tuple[str, str]], set[str]]:
+    """(label -> (the label counted instead, why), trainee keys whose name clashes).
+
+    Files are copies of one run only when they share a run id (old records without one:
+    when they share trainee, condition and run number, as before ids). Two runs with
+    different ids under one name in different folders are two trainees: a name clash.
+    In one folder, the run changed last is counted (the trainee began the run again)."""
     groups: dict[tuple, list] = {}
     for outcome, meta, _ in outcomes:
         if meta is not None and outcome.counted:
             groups.setdefault(meta.key, []).append((outcome, meta))
-    beaten = {}
-    for members in groups.values():
-        if len(members) < 2:
-            continue
-        # the finished one, then the one changed last, then the shorter name (NF.json
-        # before the NF-2.json the tutor saves beside it)
-        best = max(members, key=lambda m: (m[1].finished, m[1].latest, -len(m[0].file)))[0]
-        for outcome, _ in members:
-            if outcome is not best:
-                beaten[outcome.file] = best.file
-    return beaten
+    beaten, clashes = {}, set()
+    for key, members in groups.items():
+        copies: dict = {}
+        for m in members:
+            copies.setdefault(m[1].run_id, []).append(m)
+        kept = []
+        for run_id, same in copies.items():
+            best = _best(same)
+            why = "holds the same run" + (" (the same run id)" if run_id else "")
+            beaten.update({o.file: (best[0].file, why) for o, _ in same if o is not best[0]})
+            kept.append(best)
+        by_folder: dict = {}
+        for m in kept:
+            by_folder.setdefault(_folder(m[0].file), []).append(m)
+        if len(by_folder) > 1:
+            clashes.add(key[0])
+        for same in by_folder.values():
+            best = _best(same)
+            why = "is a later run of the same condition in the same folder"
+            beaten.update({o.file: (best[0].file, why) for o, _ in same if o is not best[0]})
+    return beaten, clashes
+
+
+def _apart(outcome: FileOutcome, clashes: set[str]) -> FileOutcome:
+    """A file of a clashing name, keyed by name and folder (a trainee of its own)."""
+    if outcome.trainee_key not in clashes:
+        return outcome
+    folder = _folder(outcome.file)
+    return replace(
+        outcome,
+        trainee_key=f"{outcome.trainee_key}@{folder}",
+        trainee=f"{outcome.trainee} ({folder})",
+        reason=outcome.reason
+        or f"name clash: other trainees typed the name {outcome.trainee!r} too; "
+        f"told apart by their folder ({folder})",
+    )
 
 
 def _score(path: Path, experiment: int, outcomes, settings) -> ClassResult:
-    beaten = _duplicates(outcomes)
+    beaten, clashes = _duplicates(outcomes)
     files, rows, demo_rows = [], [], []
+    old_runs = sum(1 for o, meta, _ in outcomes if meta is not None and meta.run_id is None)
     for outcome, meta, replayed in outcomes:
         if outcome.file in beaten:
+            instead, why = beaten[outcome.file]
             outcome = replace(
                 outcome,
                 kind="duplicate",
-                reason=f"{beaten[outcome.file]} holds the same run ({meta.label} of "
-                f"{meta.name}); that file is counted",
+                reason=f"{instead} {why} ({meta.label} of {meta.name}); that file is counted",
             )
-        elif outcome.counted:
+        outcome = _apart(outcome, clashes)
+        if outcome.counted:
             kind, reason, row, extra = replayed
             if kind != "counted":
                 outcome = replace(outcome, kind=kind, reason=reason)
@@ -662,4 +750,6 @@ def _score(path: Path, experiment: int, outcomes, settings) -> ClassResult:
         demos["teacher"] = demos.trainee_key.map(number)
         runs = runs.sort_values(["teacher", "run", "condition"], kind="stable")
         runs = runs.reset_index(drop=True)
-    return ClassResult(experiment, str(path), runs, demos, files, settings)
+    result = ClassResult(experiment, str(path), runs, demos, files, settings)
+    result.old_runs = old_runs
+    return result

@@ -32,6 +32,7 @@ import asyncio
 import base64
 import html
 import io
+import numbers
 import os
 import tempfile
 import time
@@ -39,7 +40,7 @@ from pathlib import Path
 
 import ipywidgets as w
 
-from ..errors import TutorError
+from ..errors import InvalidParameterError, TutorError
 from ..runtime import headless, sessions_root
 from .class_report import analyse_class, class_figure, save_class
 from .classroom import read_class
@@ -75,6 +76,35 @@ def _list(items: list[str], empty: str) -> str:
     return "<ul>" + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
 
 
+def plural(n: int, word: str) -> str:
+    """E.g. "1 trainee", "36 trainees"."""
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+
+
+def check_board_options(experiment, refresh_seconds):
+    """(experiment, refresh_seconds) checked: 1 or 2, and None or whole seconds in
+    :data:`REFRESH_RANGE` (raises InvalidParameterError naming the allowed values)."""
+    if isinstance(experiment, bool) or experiment not in (1, 2):
+        raise InvalidParameterError(
+            f"experiment must be 1 (maze) or 2 (pick-and-place), got {experiment!r}"
+        )
+    if refresh_seconds is None:
+        return int(experiment), None
+    low, high = REFRESH_RANGE
+    whole = (
+        not isinstance(refresh_seconds, bool)
+        and isinstance(refresh_seconds, numbers.Real)
+        and refresh_seconds == refresh_seconds  # not nan
+        and float(refresh_seconds).is_integer()
+    )
+    if not whole or not low <= refresh_seconds <= high:
+        raise InvalidParameterError(
+            f"refresh_seconds must be None (no automatic refresh) or whole seconds from "
+            f"{low} to {high}, got {refresh_seconds!r}"
+        )
+    return int(experiment), int(refresh_seconds)
+
+
 class ClassDashboard:
     """The dashboard's widgets and what they do (see the module docstring).
 
@@ -88,6 +118,7 @@ class ClassDashboard:
     """
 
     def __init__(self, folder=None, experiment: int = 1, refresh_seconds: int | None = None):
+        experiment, refresh_seconds = check_board_options(experiment, refresh_seconds)
         self._cache: dict = {}
         self._timer = None
         self._rehearsing = False
@@ -241,10 +272,12 @@ class ClassDashboard:
             else ""
         )
         self._say(
-            f"<b>{len(result.runs)} runs</b> counted from <b>{n_counted} trainees</b> "
+            f"<b>{plural(len(result.runs), 'run')}</b> counted from "
+            f"<b>{plural(n_counted, 'trainee')}</b> "
             f"in {html.escape(result.source)}; {len(result.not_counted)} files not "
             f"counted.{aside} Read at {stamp} in {seconds:.1f} s."
             + html.escape(f" {result.cannot_read_note}".rstrip())
+            + "".join(f" {html.escape(n[:1].upper() + n[1:])}." for n in result.notes)
         )
         if result.runs.empty:
             self.beside.value = "<p>No finished run of this experiment yet.</p>"
@@ -364,9 +397,9 @@ class ClassDashboard:
         from .simulated_class import write_simulated_class
 
         folder = Path(tempfile.mkdtemp(prefix="lfd-simulated-class-")) / "class"
-        self._say("Writing a simulated class (30 trainees)…")
-        write_simulated_class(folder, self.experiment.value, n if self.experiment.value == 1
-                              else 36, seed=1, unfinished=2, damaged=3)
+        n = n if self.experiment.value == 1 else 36  # Experiment 2: 4 conditions of 9
+        self._say(f"Writing a simulated class ({plural(n, 'trainee')})…")
+        write_simulated_class(folder, self.experiment.value, n, seed=1, unfinished=2, damaged=3)
         self._rehearsing = True  # one read, not one for the new folder and one here
         try:
             self.folder.value = str(folder)
