@@ -242,7 +242,7 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
             lines.append(f"  {f.file}: {f.kind} — {f.reason}")
     else:
         lines.append("Every run file of this experiment was counted.")
-    lines += [_sentence_case(note) for note in result.notes]
+    lines += [as_sentence(note) for note in result.notes]
     others = result.other_experiment
     if others:
         other = 2 if exp == 1 else 1
@@ -253,7 +253,8 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
     return "\n".join(lines)
 
 
-def _sentence_case(note: str) -> str:
+def as_sentence(note: str) -> str:
+    """A :attr:`ClassResult.notes` entry as a sentence: capitalised, with its full stop."""
     return note[:1].upper() + note[1:] + "."
 
 

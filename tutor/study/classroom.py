@@ -42,6 +42,7 @@ from ..errors import InvalidFileError, InvalidParameterError, TutorError
 from ..fileio import MAX_FILE_BYTES, decode_text, megabytes, parse_json, read_json
 from ..framework.assignment import ClassPlan, load_plan
 from ..framework.record import RunRecord
+from ..framework.wording import plural
 from ..workers import one_blas_thread, process_pool
 from .cohort import EXPERIMENTS, StudySettings, _task, rows_of
 
@@ -162,7 +163,7 @@ class ClassResult:
         run", or "" when every record has an id."""
         if not self.old_runs:
             return ""
-        runs = "1 old run" if self.old_runs == 1 else f"{self.old_runs} old runs"
+        runs = plural(self.old_runs, "old run")
         return f"{runs} without a run id: duplicates judged by name, condition and run"
 
     @property
@@ -203,9 +204,8 @@ class ClassResult:
         n = len(self.unreadable_folders)
         if not n:
             return ""
-        folders = "folder" if n == 1 else "folders"
         return (
-            f"You cannot read {n} trainee {folders} (listed below): their runs are not "
+            f"You cannot read {plural(n, 'trainee folder')} (listed below): their runs are not "
             "counted. Read the class as root or from an account in the educators' group."
         )
 
@@ -678,25 +678,27 @@ def _duplicates(outcomes) -> tuple[dict[str, tuple[str, str]], set[str]]:
         if meta is not None and outcome.counted:
             groups.setdefault(meta.key, []).append((outcome, meta))
     beaten, clashes = {}, set()
+
+    def keep_one(same: list, why: str):
+        best = _best(same)
+        beaten.update({o.file: (best[0].file, why) for o, _ in same if o is not best[0]})
+        return best
+
     for key, members in groups.items():
         copies: dict = {}
         for m in members:
             copies.setdefault(m[1].run_id, []).append(m)
-        kept = []
-        for run_id, same in copies.items():
-            best = _best(same)
-            why = "holds the same run" + (" (the same run id)" if run_id else "")
-            beaten.update({o.file: (best[0].file, why) for o, _ in same if o is not best[0]})
-            kept.append(best)
+        kept = [
+            keep_one(same, "holds the same run" + (" (the same run id)" if run_id else ""))
+            for run_id, same in copies.items()
+        ]
         by_folder: dict = {}
         for m in kept:
             by_folder.setdefault(_folder(m[0].file), []).append(m)
         if len(by_folder) > 1:
             clashes.add(key[0])
         for same in by_folder.values():
-            best = _best(same)
-            why = "is a later run of the same condition in the same folder"
-            beaten.update({o.file: (best[0].file, why) for o, _ in same if o is not best[0]})
+            keep_one(same, "is a later run of the same condition in the same folder")
     return beaten, clashes
 
 
@@ -750,6 +752,4 @@ def _score(path: Path, experiment: int, outcomes, settings) -> ClassResult:
         demos["teacher"] = demos.trainee_key.map(number)
         runs = runs.sort_values(["teacher", "run", "condition"], kind="stable")
         runs = runs.reset_index(drop=True)
-    result = ClassResult(experiment, str(path), runs, demos, files, settings)
-    result.old_runs = old_runs
-    return result
+    return ClassResult(experiment, str(path), runs, demos, files, settings, old_runs=old_runs)

@@ -41,8 +41,9 @@ from pathlib import Path
 import ipywidgets as w
 
 from ..errors import InvalidParameterError, TutorError
+from ..framework.wording import plural
 from ..runtime import headless, sessions_root
-from .class_report import analyse_class, class_figure, save_class
+from .class_report import analyse_class, as_sentence, class_figure, save_class
 from .classroom import read_class
 
 __all__ = ["ClassDashboard", "class_dashboard", "CLASS_DIR_ENV", "default_class_folder"]
@@ -74,11 +75,6 @@ def _list(items: list[str], empty: str) -> str:
     if not items:
         return f"<p>{html.escape(empty)}</p>"
     return "<ul>" + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
-
-
-def plural(n: int, word: str) -> str:
-    """E.g. "1 trainee", "36 trainees"."""
-    return f"{n} {word}" if n == 1 else f"{n} {word}s"
 
 
 def check_board_options(experiment, refresh_seconds):
@@ -277,7 +273,7 @@ class ClassDashboard:
             f"in {html.escape(result.source)}; {len(result.not_counted)} files not "
             f"counted.{aside} Read at {stamp} in {seconds:.1f} s."
             + html.escape(f" {result.cannot_read_note}".rstrip())
-            + "".join(f" {html.escape(n[:1].upper() + n[1:])}." for n in result.notes)
+            + "".join(f" {html.escape(as_sentence(n))}" for n in result.notes)
         )
         if result.runs.empty:
             self.beside.value = "<p>No finished run of this experiment yet.</p>"

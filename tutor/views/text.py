@@ -25,6 +25,7 @@ import re
 import numpy as np
 
 from ..framework import AMBIGUOUS, INCORRECT, UNDEMONSTRATED
+from ..framework.wording import plural
 from ..tasks.optimal_reference import optimal_reference
 
 __all__ = [
@@ -66,10 +67,6 @@ def hint_sentence(task, plant: int) -> str:
 def _name(task, index: int) -> str:
     namer = getattr(task, "plant_name", None)
     return namer(index) if namer is not None else f"{task.condition_noun} {index + 1}"
-
-
-def _plural(k: int, noun: str, nouns: str) -> str:
-    return f"{k} {noun if k == 1 else nouns}"
 
 
 def _did(task, record, vis, n_demos: int) -> str:
@@ -250,14 +247,14 @@ def finish_summary(run, paper: float, statistic: str, condition: str | None = No
     if run.score_rule == "target":
         how = (
             f"{TARGET:.0%} coverage was reached after "
-            f"{_plural(s.n_demos, 'demonstration', 'demonstrations')}"
+            f"{plural(s.n_demos, 'demonstration', 'demonstrations')}"
             if s.reached
             else f"{TARGET:.0%} was not reached; after all {s.n_demos} demonstrations the "
             f"robot succeeds from {s.efficacy:.0%} of the {run.task.condition_noun_plural}"
         )
     else:
         how = (
-            f"after {_plural(s.n_demos, 'demonstration', 'demonstrations')} the robot "
+            f"after {plural(s.n_demos, 'demonstration', 'demonstrations')} the robot "
             f"succeeds at {s.efficacy:.0%} of the {run.task.condition_noun_plural}"
         )
     text = (
@@ -291,7 +288,7 @@ def optimal_sentence(task, n_demos: int | None = None) -> str:
     fewest = "the fewest this robot needs" if ref.is_proven else "the fewest found"
     head = f"{fewest} {goal} is {ref.n_demos}"
     if n_demos is not None:
-        head = f"you used {_plural(n_demos, 'demonstration', 'demonstrations')}; {head}"
+        head = f"you used {plural(n_demos, 'demonstration', 'demonstrations')}; {head}"
     return (
         f"{head[0].upper()}{head[1:]}, so the best possible η by this experiment's score is "
         f"{ref.best_eta:.1%}."
