@@ -2,7 +2,8 @@
 Robot Learning from Demonstration", in one place.
 
 The comment above each value names the section (or table) of the paper it comes from
-(``/work/shared/paper/quantifying-teaching-behaviour.tex``, digest in ``DIGEST.md``).
+(A. Sena and M. Howard, King's College London; the experiments' data:
+http://doi.org/10.18742/RDM01-242).
 Proportions, not percentages: the paper's 7.6 % is 0.076 here.
 
 This module sits at the bottom of the layers (like :mod:`tutor.errors`) and imports
