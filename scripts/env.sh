@@ -66,6 +66,14 @@ _tutor_env_setup() {
         mkdir -p "$settings" &&
             cp "$TUTOR_ROOT/scripts/jupyterlab_overrides.json" "$settings/overrides.json"
     fi
+    # and no debugger: trainees do not need it, and it sends a debug request to every
+    # kernel it sees (its "Could not restore the debugger state" when a busy kernel
+    # stops); see scripts/jupyterlab_page_config.json.
+    local labconfig="$TUTOR_VENV/etc/jupyter/labconfig"
+    if ! cmp -s "$TUTOR_ROOT/scripts/jupyterlab_page_config.json" "$labconfig/page_config.json"; then
+        mkdir -p "$labconfig" &&
+            cp "$TUTOR_ROOT/scripts/jupyterlab_page_config.json" "$labconfig/page_config.json"
+    fi
 }
 
 if _tutor_env_setup; then
