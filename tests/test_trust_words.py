@@ -123,3 +123,13 @@ def test_notebook_01_asks_for_nothing_it_cannot_do(task):
     # bundled demos cannot be taken back here: the line points at the tutors' Undo
     bundled = summary(mine.latest)
     assert "Undo button" in bundled and "my_starts" not in bundled
+
+
+def test_notebook_00_lists_every_notebook_and_only_those():
+    welcome = next(NOTEBOOKS.glob("00_*.ipynb"))
+    table = next(c for c in _cells(welcome, "markdown") if c.startswith("## The notebooks"))
+    rows = re.findall(r"^\| \[([^\]]+)\]\(([^)]+)\) \|", table, re.MULTILINE)
+    listed = [target for _, target in rows]
+    on_disk = sorted(p.name for p in NOTEBOOKS.glob("*.ipynb"))
+    assert listed == on_disk, (listed, on_disk)  # every one, in order, none that is not there
+    assert all(f"{name}.ipynb" == target for name, target in rows), rows
