@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import json
 import re
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -133,3 +134,19 @@ def test_notebook_00_lists_every_notebook_and_only_those():
     on_disk = sorted(p.name for p in NOTEBOOKS.glob("*.ipynb"))
     assert listed == on_disk, (listed, on_disk)  # every one, in order, none that is not there
     assert all(f"{name}.ipynb" == target for name, target in rows), rows
+
+
+def test_the_notebooks_voila_serves_ask_for_the_offline_template():
+    repo = NOTEBOOKS.parent
+    template = repo / "share" / "jupyter" / "voila" / "templates" / "lfd-tutor"
+    assert json.loads((template / "conf.json").read_text())["base_template"] == "lab"
+    page = (template / "index.html.j2").read_text()
+    assert "block notebook_css" in page and "_xsrf" in page
+    for name in ("02_maze_experiment", "03_pick_and_place", "05_class_results"):
+        meta = json.loads((NOTEBOOKS / f"{name}.ipynb").read_text())["metadata"]
+        assert meta.get("voila") == {"template": "lfd-tutor"}, name
+    # every file of the template is installed with the package (a wheel's data files)
+    with open(repo / "pyproject.toml", "rb") as f:
+        data_files = tomllib.load(f)["tool"]["setuptools"]["data-files"]
+    listed = data_files["share/jupyter/voila/templates/lfd-tutor"]
+    assert sorted(listed) == sorted(str(p.relative_to(repo)) for p in template.iterdir())
