@@ -74,6 +74,15 @@ _tutor_env_setup() {
         mkdir -p "$labconfig" &&
             cp "$TUTOR_ROOT/scripts/jupyterlab_page_config.json" "$labconfig/page_config.json"
     fi
+
+    # Voila's page for the tutor's notebooks (share/jupyter/voila/templates/lfd-tutor: no
+    # CDN, the kernel shut down on leaving). A wheel installs it as data files; an editable
+    # install does not, so it is copied here.
+    local template="share/jupyter/voila/templates/lfd-tutor"
+    if ! diff -rq "$TUTOR_ROOT/$template" "$TUTOR_VENV/$template" >/dev/null 2>&1; then
+        rm -rf "${TUTOR_VENV:?}/$template" && mkdir -p "$TUTOR_VENV/$template" &&
+            cp "$TUTOR_ROOT/$template"/* "$TUTOR_VENV/$template/"
+    fi
 }
 
 if _tutor_env_setup; then

@@ -188,6 +188,11 @@ def test_wheel_carries_the_package_data(installed):
         Path(n).name for n in names if n.startswith("tutor/assets/demos/") and n.endswith(".json")
     )
     assert bundled and in_wheel == bundled
+    # Voila's page for the tutor's notebooks, as data files installed under share/jupyter
+    template = "share/jupyter/voila/templates/lfd-tutor"
+    shipped = sorted(p.name for p in (REPO / template).iterdir())
+    in_data = sorted(Path(n).name for n in names if f".data/data/{template}/" in n)
+    assert shipped and in_data == shipped, (in_data, shipped)
     scripts = [n for n in names if n.endswith("entry_points.txt")]
     assert scripts, "the wheel has no entry_points.txt"
     entry_points = zipfile.ZipFile(wheel).read(scripts[0]).decode()

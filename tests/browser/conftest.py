@@ -7,8 +7,10 @@ autosave never writes outputs into the repository) and its own session folder.
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import json
 import os
+import re
 import shutil
 import signal
 import socket
@@ -17,6 +19,7 @@ import sys
 import time
 import urllib.request
 from pathlib import Path
+from urllib.parse import urlparse
 
 import pytest
 
@@ -131,11 +134,29 @@ def jupyterlab(workdir):
         log.close()
 
 
+def voila_log(root: Path, notebook: str) -> Path:
+    """The file :func:`voila_server` writes Voila's log to."""
+    return root / f"voila-{Path(notebook).stem}.log"
+
+
+#: a line of Jupyter server's request log for an answer of 400 or more, e.g.
+#: ``403 POST /voila/api/shutdown/<id> (127.0.0.1) 11.93ms``
+HTTP_ERROR_LINE = re.compile(
+    r"^(?:\[[^\]]*\]\s*)?(?:\w+\s*\|\s*)?([45]\d\d) (GET|HEAD|POST|PUT|PATCH|DELETE|OPTIONS) \S+",
+    re.MULTILINE,
+)
+
+
+def http_errors_in_log(text: str) -> list[str]:
+    """The requests a server's log says it answered with 400 or more (one line each)."""
+    return [m.group(0) for m in HTTP_ERROR_LINE.finditer(text)]
+
+
 @contextlib.contextmanager
 def voila_server(root: Path, env: dict, notebook: str):
     """Voila serving ``root/notebooks/<notebook>`` on a free loopback port; yields its URL."""
     port = free_port()
-    log = open(root / f"voila-{Path(notebook).stem}.log", "w")  # noqa: SIM115
+    log = open(voila_log(root, notebook), "w")  # noqa: SIM115
     proc = subprocess.Popen(
         [
             sys.executable,
@@ -298,6 +319,65 @@ def accept_kernel_dialog(pg) -> None:
                 pass  # not ready, or asked again: look again
 
     pg.add_locator_handler(dialog, accept)
+
+
+def is_loopback(url: str) -> bool:
+    """Whether ``url`` stays on this machine: a loopback host, or no host at all (data:,
+    blob:, about:)."""
+    parsed = urlparse(url)
+    if parsed.scheme not in ("http", "https", "ws", "wss"):
+        return True
+    host = (parsed.hostname or "").strip("[]")
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def watch_network(pg) -> list[str]:
+    """Collect what ``pg`` asks of the network that a page served offline must not: any
+    request or websocket to a host off this machine (a CDN, say), any response of 400 or
+    more (a 403 for a POST without the ``_xsrf`` token, a missing file), and any request
+    that fails. Returns the growing list (see :func:`fail_on_errors`)."""
+    problems: list[str] = []
+
+    def on_request(req):
+        if not is_loopback(req.url):
+            problems.append(f"request off the machine: {req.method} {req.url}")
+
+    def on_response(resp):
+        if resp.status >= 400:
+            problems.append(f"HTTP {resp.status}: {resp.request.method} {resp.url}")
+
+    def on_failed(req):
+        problems.append(f"request failed ({req.failure}): {req.method} {req.url}")
+
+    def on_websocket(ws):
+        if not is_loopback(ws.url):
+            problems.append(f"websocket off the machine: {ws.url}")
+
+    pg.on("request", on_request)
+    pg.on("response", on_response)
+    pg.on("requestfailed", on_failed)
+    pg.on("websocket", on_websocket)
+    return problems
+
+
+@pytest.fixture
+def voila_page(browser, request):
+    """A fresh page for a Voila app: the test fails at teardown on any page or console
+    error, and on any request off the machine, any HTTP error response and any failed
+    request (:func:`watch_network`), as a workshop room with no internet would show."""
+    context = browser.new_context(viewport={"width": 1400, "height": 1000})
+    pg = context.new_page()
+    errors = watch_errors(pg)
+    network = watch_network(pg)
+    yield pg
+    seen = errors + network  # before closing: requests cut short by the close are not faults
+    context.close()
+    fail_on_errors(seen, request.node.name)
 
 
 @pytest.fixture

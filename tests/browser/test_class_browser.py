@@ -4,16 +4,22 @@ Voila serves notebook 05 with ``TUTOR_CLASS_DIR`` pointing at a generated class 
 simulated trainees, one run unfinished, one file spoiled). The test reads the page as an
 educator would, adds a late trainee's folder and presses Refresh with the mouse, types
 another folder with the keyboard, switches experiment, and runs axe-core on the page.
-Any page or console error fails the test.
+Any page or console error fails the test, and so does any request off the machine (a
+CDN), any HTTP error response (a 403 for a POST without the ``_xsrf`` token) and any
+failed request (``voila_page``). The page is served with the tutor's Voila template
+(``share/jupyter/voila/templates/lfd-tutor``): the widgets' icon font comes from Voila
+itself, and leaving the page shuts its kernel down, with no error in Voila's log.
 """
 
 from __future__ import annotations
 
+import json
 import shutil
+import time
 
 import pytest
 
-from tests.browser.conftest import axe_check, voila_server
+from tests.browser.conftest import axe_check, http_errors_in_log, voila_log, voila_server
 from tutor.study.simulated_class import write_simulated_class
 
 pytestmark = pytest.mark.browser
@@ -30,11 +36,23 @@ def class_folder(tmp_path_factory):
     return folder, sorted((root / "late").iterdir())[-1]  # trainee 09, not in the class
 
 
+NOTEBOOK = "05_class_results.ipynb"
+
+
 @pytest.fixture(scope="module")
 def dashboard_url(workdir, class_folder):
+    from voila.paths import collect_template_paths
+
+    try:
+        collect_template_paths(["voila", "nbconvert"], "lfd-tutor", prune=True)
+    except ValueError:
+        pytest.fail(
+            "Voila cannot find the tutor's template lfd-tutor: scripts/env.sh copies "
+            "share/jupyter/voila/templates/lfd-tutor into the venv (a wheel installs it)"
+        )
     root, env = workdir
     env = {**env, "TUTOR_CLASS_DIR": str(class_folder[0]), "MPLBACKEND": "Agg"}
-    with voila_server(root, env, "05_class_results.ipynb") as url:
+    with voila_server(root, env, NOTEBOOK) as url:
         yield url
 
 
@@ -42,9 +60,20 @@ def _status(page) -> str:
     return page.locator(".lfd-class-status").inner_text()
 
 
-def test_dashboard_in_voila(page, dashboard_url, class_folder, artifacts):
+def _wait_in_log(log, text: str, timeout: float = 30.0) -> str:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        found = log.read_text()
+        if text in found:
+            return found
+        time.sleep(0.2)
+    raise AssertionError(f"{text!r} not in Voila's log within {timeout} s:\n{found[-2000:]}")
+
+
+def test_dashboard_in_voila(voila_page, workdir, dashboard_url, class_folder, artifacts):
+    page = voila_page
     folder, late = class_folder
-    page.goto(dashboard_url)
+    page.goto(dashboard_url, timeout=TIMEOUT_MS)  # Voila runs the notebook first
     status = page.locator(".lfd-class-status")
     status.get_by_text("counted from").wait_for(timeout=TIMEOUT_MS)
     assert "22 runs counted from 8 trainees" in _status(page)
@@ -100,3 +129,19 @@ def test_dashboard_in_voila(page, dashboard_url, class_folder, artifacts):
     status.get_by_text("25 runs").wait_for(timeout=60_000)
     page.screenshot(path=str(artifacts / "class_dashboard_voila_after.png"), full_page=True)
     axe_check(page, artifacts, "class_dashboard", [".lfd-class-dashboard"])
+
+    # the buttons' icons are drawn with the icon font Voila serves (no CDN was asked)
+    icon = page.locator(".lfd-class-refresh i.fa")
+    assert "Font Awesome" in icon.evaluate("(e) => getComputedStyle(e).fontFamily")
+    assert page.evaluate(
+        "async () => { await document.fonts.ready; "
+        "return document.fonts.check('900 16px \"Font Awesome 5 Free\"'); }"
+    )
+
+    # leaving the page shuts its kernel down: Voila's POST carries a valid _xsrf token
+    config = json.loads(page.locator("#jupyter-config-data").text_content())
+    kernel = config["kernelId"]
+    page.goto("about:blank")
+    log = voila_log(workdir[0], NOTEBOOK)
+    text = _wait_in_log(log, f"Kernel shutdown: {kernel}")
+    assert not http_errors_in_log(text), http_errors_in_log(text)

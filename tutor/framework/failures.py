@@ -26,6 +26,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..errors import InvalidParameterError
+from .wording import efficacy_change
 
 __all__ = [
     "Thresholds",
@@ -86,12 +87,16 @@ class TeachingWarning:
         1-based number of the demo concerned (None for undemonstrated states).
     count : int
         How many test conditions (undemonstrated) or demos (otherwise) it concerns.
+    take_back : tuple of int
+        The demos (1-based) the message asks the trainee to take back, so that each view
+        can say how it does that (the tutors' Undo button, a list in a notebook cell).
     """
 
     kind: str
     message: str
     demo: int | None = None
     count: int = 1
+    take_back: tuple[int, ...] = ()
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -165,8 +170,9 @@ def demo_warnings(
             TeachingWarning(
                 INCORRECT,
                 f"Demo {m} is not a correct example: it {demo_reason}. "
-                "Undo it and demonstrate that again.",
+                "Take it back and demonstrate that again.",
                 demo=m,
+                take_back=(m,),
             )
         ]
     if is_ambiguous(similarity, delta, ambiguity_distance, thresholds):
@@ -174,8 +180,8 @@ def demo_warnings(
             TeachingWarning(
                 AMBIGUOUS,
                 f"Demo {m} is almost the same as demo {nearest} (on average "
-                f"{format_distance(similarity)} apart) and changed efficacy by "
-                f"{100 * delta:+.0f} points: start further from your other demos.",
+                f"{format_distance(similarity)} apart) and {efficacy_change(delta)}: start "
+                "further from your other demos.",
                 demo=m,
             )
         ]
@@ -186,18 +192,20 @@ def demo_warnings(
             if delta < 0
             else f"efficacy stayed at {eps:.0%}"
         )
-        wrong = list(wrong_earlier)
+        wrong = [int(i) for i in wrong_earlier]
+        take_back = tuple(wrong) or (m,)
         if wrong:
             many = len(wrong) > 1
             advice = (
                 f"demo{'s' if many else ''} {', '.join(map(str, wrong))} "
                 f"{'are' if many else 'is'} not a correct example and still teach"
-                f"{'' if many else 'es'} the robot the wrong thing: remove "
-                f"{'them' if many else 'it'} first."
+                f"{'' if many else 'es'} the robot the wrong thing: take "
+                f"{'them' if many else 'it'} back first."
             )
         else:
-            advice = "check that it shows the task the way you meant; undo it if not."
+            advice = "check that it shows the task the way you meant; take it back if not."
         if m == 1:
+            take_back = ()
             text = (
                 f"Demo 1 made things no better ({change}): the robot fails even where you "
                 "showed it. Check that the demo shows the task the way you meant; if it does, "
@@ -208,7 +216,7 @@ def demo_warnings(
                 f"Demo {m} made things no better ({change}) although it differs from your "
                 f"other demos: {advice}"
             )
-        return [TeachingWarning(INCORRECT, text, demo=m)]
+        return [TeachingWarning(INCORRECT, text, demo=m, take_back=take_back)]
     return []
 
 

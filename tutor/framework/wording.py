@@ -1,8 +1,8 @@
-"""Words every layer shares when it talks to a person (counts with their nouns)."""
+"""Words every layer shares when it talks to a person (counts with their nouns, changes)."""
 
 from __future__ import annotations
 
-__all__ = ["plural"]
+__all__ = ["plural", "change_points", "efficacy_change"]
 
 
 def plural(k: int, noun: str, nouns: str | None = None) -> str:
@@ -12,3 +12,23 @@ def plural(k: int, noun: str, nouns: str | None = None) -> str:
     ('1 trainee', '36 trainees', '2 passes')
     """
     return f"{k} {noun if k == 1 else (nouns or noun + 's')}"
+
+
+def change_points(delta: float) -> int:
+    """A change of efficacy (a fraction, e.g. eps_m - eps_{m-1}) in whole percentage points,
+    as the tutor shows it: 0.0071 -> 1, -0.25 -> -25."""
+    return int(round(100 * float(delta)))
+
+
+def efficacy_change(delta: float) -> str:
+    """A change of efficacy in words, its direction read off the points shown.
+
+    >>> efficacy_change(0.0071), efficacy_change(-0.25), efficacy_change(0.001)
+    ('efficacy rises by 1 point', 'efficacy drops by 25 points', 'efficacy stays the same')
+    """
+    points = change_points(delta)
+    if points > 0:
+        return f"efficacy rises by {plural(points, 'point')}"
+    if points < 0:
+        return f"efficacy drops by {plural(-points, 'point')}"
+    return "efficacy stays the same"

@@ -25,7 +25,7 @@ import re
 import numpy as np
 
 from ..framework import AMBIGUOUS, INCORRECT, UNDEMONSTRATED
-from ..framework.wording import plural
+from ..framework.wording import change_points, efficacy_change, plural
 from ..tasks.optimal_reference import optimal_reference
 
 __all__ = [
@@ -33,6 +33,7 @@ __all__ = [
     "finish_summary",
     "optimal_sentence",
     "summary",
+    "incorrect_mark",
     "session_report",
     "plain_reason",
     "hint_sentence",
@@ -298,18 +299,69 @@ def optimal_sentence(task, n_demos: int | None = None) -> str:
 # ---------------------------------------------------------------- short forms (notebook 01)
 
 
-def summary(record) -> str:
-    """A few lines about one step with everything shown (for the framework's notebook)."""
+def summary(record, starts: str = "") -> str:
+    """A few lines about one step with everything shown (for the framework's notebook).
+
+    The change of efficacy is put in words read off the same number the line shows
+    (:func:`tutor.framework.wording.efficacy_change`). ``starts`` names the list of start
+    points the cell demonstrates from, one demo each in order (e.g. ``"my_starts"``): a
+    demo the tutor asks to take back is then taken back by removing its start point there
+    and running the cell again. Without it the demos are bundled ones, and the line says
+    how the tutors of notebooks 02 and 03 take a demo back (their Undo button).
+    """
     if record is None:
         return "No demonstration yet: show the robot the task once."
     lines = [
-        f"After demo {record.n_demos}: efficacy {record.efficacy:.0%} "
-        f"({100 * record.delta:+.0f} points), efficiency η = {record.efficiency:.1%}."
+        f"After demo {record.n_demos}: {efficacy_change(record.delta)} "
+        f"(ε = {record.efficacy:.0%}); efficiency η = {record.efficiency:.1%}."
     ]
     lines += [f"- {w.message}" for w in record.warnings]
+    back = sorted({i for w in record.warnings for i in w.take_back})
+    if back:
+        lines.append(f"- {_how_to_take_back(back, starts)}")
     if not record.warnings:
         lines.append("- No failures: every test condition succeeds or was demonstrated.")
     return "\n".join(lines)
+
+
+def _how_to_take_back(demos: list[int], starts: str) -> str:
+    """How notebook 01 takes back ``demos`` (1-based): from the cell's list ``starts``."""
+    many = len(demos) > 1
+    names = ", ".join(f"demo {i}" for i in demos)
+    if starts:
+        where = ", ".join(f"{starts}[{i - 1}]" for i in demos)
+        return (
+            f"To take {names} back, remove {'their start points' if many else 'its start point'}"
+            f" ({where}) from {starts} and run the cell again."
+        )
+    return (
+        f"These are bundled demonstrations, so {names} stay{'' if many else 's'} here; in the "
+        "tutors of notebooks 02 and 03 the Undo button takes your latest demo back."
+    )
+
+
+def incorrect_mark(record) -> str:
+    """Whether the paper's mark of an incorrect demo (its efficacy change is at most 0)
+    shows on this step, read off the change of efficacy the step shows, and the tutor's
+    own check of the demo against the task's rules beside it (for the framework's
+    notebook)."""
+    m = record.n_demos
+    change = efficacy_change(record.delta)
+    mark = "The paper's mark of an incorrect demonstration (εₘ − εₘ₋₁ ≤ 0)"
+    if change_points(record.delta) <= 0:
+        head = f"{mark} shows here: {change}."
+    else:
+        head = (
+            f"{mark} does not show here: {change}, since the robot now succeeds from more "
+            "of the test set than before."
+        )
+    if record.demo_passed:
+        return f"{head} Demo {m} itself keeps to the task's rules."
+    still = "still " if change_points(record.delta) > 0 else "also "
+    return (
+        f"{head} The tutor {still}flags demo {m}, because it breaks the task's rules: it "
+        f"{plain_reason(record.demo_reason)}."
+    )
 
 
 def session_report(session, target: float = TARGET) -> str:
