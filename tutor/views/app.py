@@ -10,7 +10,10 @@
 - **One writer per file.** The tutor that owns a run file holds a lock on it
   (:mod:`filelock`; the operating system releases it when a kernel dies, so a killed
   kernel's lock is taken over safely). A second tutor or kernel on the same file is told
-  so in plain words and gets a read-only view.
+  so in plain words and gets a read-only view. A lock that cannot be taken at all (its
+  lock file is a folder or another user's, the folder is read-only) fails closed: the
+  run is shown read-only, the panel says why, and Save raises
+  :class:`~tutor.errors.LockError`. Nothing is written without the lock.
 - **Autosave** after every change, atomically (:func:`tutor.fileio.write_json`). A failed
   save (disk full, no permission, a folder that is a file) keeps everything in memory,
   says so in the panel, and is tried again at the next change or with Save.
@@ -26,6 +29,7 @@
 
 from __future__ import annotations
 
+import errno
 import functools
 import html
 import logging
@@ -38,7 +42,14 @@ import ipywidgets as w
 import numpy as np
 
 from ..demofiles import DEMOS_FORMAT, load_demos
-from ..errors import InvalidFileError, InvalidParameterError, SaveError, TutorError
+from ..errors import (
+    InvalidFileError,
+    InvalidParameterError,
+    LockError,
+    SaveError,
+    SessionInUseError,
+    TutorError,
+)
 from ..fileio import check_file_name, read_json
 from ..framework import RunRecord, TeachingRun, Trainee
 from ..framework.record import RECORD_FORMAT
@@ -56,6 +67,11 @@ LOCK_WAIT_SECONDS = 2.0
 _OWNERS: dict[str, weakref.ref] = {}
 #: how many sibling names (NF-2.json ...) are tried when a file holds another run
 _MAX_SIBLINGS = 50
+#: what a refused action says while another tutor holds the run
+_IN_USE = (
+    "This view is read-only because the run is open in another tutor: nothing was changed. "
+    "Use the other one, or close it and run this cell again."
+)
 
 
 def _check_path(path, what: str = "session_file") -> str:
@@ -67,6 +83,27 @@ def _check_path(path, what: str = "session_file") -> str:
             f'{what}=folder / "VF.json", with a shorter name if it is too long'
         )
     return os.fspath(path)
+
+
+def _lock_trouble(lock_path: Path, exc: OSError) -> str:
+    """Why the lock file ``lock_path`` cannot be taken, in plain words."""
+    name = lock_path.name
+    not_yours = (
+        f"its lock file {name} or its folder may not be written by you (it may belong to "
+        "another user)"
+    )
+    reasons = {
+        errno.EISDIR: f"its lock file {name} is a folder",
+        errno.EACCES: not_yours,
+        errno.EPERM: not_yours,
+        errno.EROFS: "the folder is on a read-only disk",
+        errno.ENOTDIR: "part of the path is a file, not a folder",
+        errno.EEXIST: "part of the path is a file, not a folder",
+        errno.ENOSPC: "the disk is full",
+        errno.EDQUOT: "your disk quota is used up",
+        errno.ENAMETOOLONG: "its path is too long",
+    }
+    return reasons.get(exc.errno) or f"{exc.strerror or exc}"
 
 
 def guarded(method):
@@ -131,6 +168,10 @@ class TutorApp:
         self.read_only = False
         self.unsaved = False
         self._lock = None
+        #: why the lock cannot be taken at all (None: it can, or another tutor holds it)
+        self._lock_problem: str | None = None
+        #: what a refused action says while the view is read-only
+        self._refusal = ""
         self._reset_asked = -1e9
         self.session_file = None if session_file is None else Path(_check_path(session_file))
         self.run = self._open()
@@ -238,12 +279,22 @@ class TutorApp:
         return run, None
 
     def _read_only_view(self, path: Path, record: RunRecord | None) -> TeachingRun:
-        self.read_only = True
-        self.message = (
-            f"{path.name} is open in another tutor (another kernel or browser tab). To "
-            "keep that run safe, this view is read-only: nothing you do here is saved. "
-            "Close the other one (or restart its kernel), then press Try again."
-        )
+        if self._lock_problem is not None:
+            self._go_read_only(
+                f"{path.name} cannot be locked ({self._lock_problem}), so this tutor shows "
+                "it read-only: nothing you do here is saved. Ask your educator, or choose "
+                "another folder; once it is fixed, press Try again.",
+                f"This view is read-only because {path.name} cannot be locked "
+                f"({self._lock_problem}): nothing was changed. Ask your educator, or choose "
+                "another folder.",
+            )
+        else:
+            self._go_read_only(
+                f"{path.name} is open in another tutor (another kernel or browser tab). To "
+                "keep that run safe, this view is read-only: nothing you do here is saved. "
+                "Close the other one (or restart its kernel), then press Try again.",
+                _IN_USE,
+            )
         if record is None:
             return self._fresh()
         try:
@@ -258,10 +309,16 @@ class TutorApp:
             return
         path = self.session_file
         if not self._take_lock(path):
-            self.message = (
-                f"{path.name} is still open in another tutor: close that one (or restart "
-                "its kernel) first. This view stays read-only."
-            )
+            if self._lock_problem is not None:
+                self.message = (
+                    f"{path.name} still cannot be locked ({self._lock_problem}). This view "
+                    "stays read-only: ask your educator, or choose another folder."
+                )
+            else:
+                self.message = (
+                    f"{path.name} is still open in another tutor: close that one (or "
+                    "restart its kernel) first. This view stays read-only."
+                )
             return
         self.read_only = False
         if path.exists():
@@ -271,11 +328,14 @@ class TutorApp:
         self.message = f"This tutor saves the run to {path.name} again."
 
     def _take_lock(self, path: Path, wait: float | None = None) -> bool:
-        """Hold ``path``'s lock; False when another kernel holds it.
+        """Hold ``path``'s lock; False when another kernel holds it or it cannot be taken.
 
         A tutor made earlier in this same kernel on the same file (a cell run again) hands
         its file over: it saves, becomes read-only and says so. Another kernel's lock is
         waited for a moment (a reloaded Voila page's old kernel may be shutting down).
+        A lock that cannot be taken at all (an OSError: the lock file is a folder or
+        another user's, the folder is read-only) fails closed: False, with the reason in
+        ``_lock_problem`` (None when another kernel holds the lock).
         """
         from filelock import FileLock, Timeout
 
@@ -290,15 +350,18 @@ class TutorApp:
         ):
             owner._hand_over()
         wait = LOCK_WAIT_SECONDS if wait is None else wait
-        lock = FileLock(str(path.with_name(f".{path.name}.lock")), timeout=wait)
+        lock_path = path.with_name(f".{path.name}.lock")
+        lock = FileLock(str(lock_path), timeout=wait)
+        self._lock_problem = None
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             lock.acquire()
         except Timeout:
             return False
-        except OSError as exc:  # no lock possible (read-only folder): saving will say so
-            log.warning("no lock on %s: %s", path, exc)
-            return True
+        except OSError as exc:  # no lock possible: fail closed (read-only), never open
+            self._lock_problem = _lock_trouble(lock_path, exc)
+            log.warning("no lock on %s (%s): read-only", path, exc)
+            return False
         self._lock = lock
         _OWNERS[key] = weakref.ref(self)
         return True
@@ -307,11 +370,11 @@ class TutorApp:
         """A newer tutor in this kernel takes this one's file: save, let go, say so."""
         self._autosave()
         self._release_lock()
-        self.read_only = True
-        self.message = (
+        self._go_read_only(
             "This tutor was replaced by a newer one on the same run (its cell was run "
             "again), which carries on with every demonstration. Use that one; this view is "
-            "read-only now."
+            "read-only now.",
+            _IN_USE,
         )
         try:
             self.refresh()
@@ -324,9 +387,23 @@ class TutorApp:
             self._lock = None
 
     def close(self) -> None:
-        """Save and let go of the run's file (another tutor may then open it)."""
+        """Save and let go of the run's file (another tutor may then open it); this view
+        is read-only afterwards."""
         self._autosave()
         self._release_lock()
+        if self.session_file is not None and not self.read_only:
+            self._go_read_only(
+                "",
+                "This tutor was closed, so it is read-only: nothing was changed. Run its "
+                "cell again to carry on.",
+            )
+
+    def _go_read_only(self, message: str, refusal: str) -> None:
+        """Show the run read-only: ``message`` now, ``refusal`` for every refused action."""
+        self.read_only = True
+        self._refusal = refusal
+        if message:
+            self.message = message
 
     def __del__(self):
         try:
@@ -337,7 +414,7 @@ class TutorApp:
     # ------------------------------------------------------------ saving
 
     def _autosave(self) -> None:
-        if self.session_file is None or self.read_only:
+        if self.session_file is None or self.read_only or self._lock is None:
             return
         try:
             self.run.save(self.session_file)
@@ -352,25 +429,34 @@ class TutorApp:
 
     def _refuse_if_read_only(self) -> bool:
         if self.read_only:
-            self.message = (
-                "This view is read-only because the run is open in another tutor: nothing "
-                "was changed. Use the other one, or close it and run this cell again."
-            )
+            self.message = self._refusal
             self.refresh()
         return self.read_only
+
+    def _check_may_save(self) -> None:
+        """Raise LockError (the lock cannot be taken) or SessionInUseError (another tutor
+        holds the run) when this view is read-only: nothing is saved then."""
+        if not self.read_only:
+            return
+        if self._lock_problem is not None:
+            raise LockError(f"Nothing was saved. {self._refusal}")
+        raise SessionInUseError(f"Nothing was saved. {self._refusal}")
 
     # ------------------------------------------------------------ actions
 
     @guarded
     def save(self, path=None) -> Path | None:
-        """Save the run (to its file by default, or to ``path``); returns the path written."""
+        """Save the run (to its file by default, or to ``path``); returns the path written.
+
+        A read-only view saves nothing: LockError when the run's file cannot be locked,
+        SessionInUseError when another tutor holds it (shown in the panel).
+        """
+        self._check_may_save()
         if path is not None:
             target = Path(path)
             self.run.save(target)
             self.message = f"Saved a copy to {target}."
             return target
-        if self._refuse_if_read_only():
-            return None
         if self.session_file is None:
             self.message = "This run has no file to save to (see above)."
             return None
@@ -568,7 +654,9 @@ class TutorApp:
         self.bring_back.layout.display = show
         self.upload.disabled = self.read_only or self.finished
         self.retry.layout.display = "flex" if self.read_only else "none"
-        if self.read_only:
+        if self.read_only and self._lock_problem is not None:
+            state = "read-only (its file cannot be locked)"
+        elif self.read_only:
             state = "read-only (open in another tutor)"
         elif self.session_file is None:
             state = "not saved to a file"
