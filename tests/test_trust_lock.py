@@ -13,8 +13,8 @@ import textwrap
 import pytest
 
 from tests.helpers import REPO
-from tutor.demofiles import bundled_demos
-from tutor.errors import LockError, SessionInUseError
+from tutor.demofiles import bundled_demos, save_demos
+from tutor.errors import InvalidFileError, LockError, SessionInUseError, WrongRunError
 from tutor.framework import RunRecord, Trainee
 from tutor.tasks.maze_run import MazeRun
 from tutor.views.app import TutorApp
@@ -214,3 +214,48 @@ def test_the_saved_copy_of_a_read_only_view_is_refused_too(tmp_path, good):
     assert one.read_only
     assert one.save(tmp_path / "copy.json") is None and "Nothing was saved" in one.message
     assert not (tmp_path / "copy.json").exists()
+
+
+# ------------------------------------------------ 2. Save never writes over another run
+
+
+def test_save_onto_another_runs_file_is_refused_and_leaves_it_byte_identical(tmp_path, good):
+    vr = MazeTutor("VR", session_file=tmp_path / "VR.json", trainee=TRAINEE)
+    vr.add(good[0])
+    theirs = MazeTutor("VF", session_file=tmp_path / "zoe" / "VF.json", trainee="Zoë")
+    theirs.add(good[1])
+    earlier = _saved_run(good, 3)  # Mai Anh's VF run of another day: another run id
+    earlier.save(tmp_path / "VF-old.json")
+    save_demos(tmp_path / "demos.csv", list(good[:2]))
+    app = MazeTutor("VF", session_file=tmp_path / "mine" / "VF.json", trainee=TRAINEE)
+    app.add(good[2])
+    others = {
+        "VR.json": ("VR run", WrongRunError),
+        "zoe/VF.json": ("Zoë", WrongRunError),
+        "VF-old.json": ("another", WrongRunError),
+        "demos.csv": ("not a run file", InvalidFileError),
+    }
+    for name, (why, error) in others.items():
+        target = tmp_path / name
+        before = target.read_bytes()
+        with pytest.raises(error, match=why) as refused:
+            raw_save(app, target)
+        assert target.name in str(refused.value) and "another file name" in str(refused.value)
+        assert app.save(target) is None and "Nothing was saved" in app.message
+        assert target.read_bytes() == before, name
+    assert vr.session.n_demos == 1 and MazeRun.load(tmp_path / "VR.json", vr.task).n_demos == 1
+
+
+def test_save_onto_its_own_file_a_copy_or_a_new_name_still_works(tmp_path, good):
+    path = tmp_path / "VF.json"
+    app = MazeTutor("VF", session_file=path, trainee=TRAINEE)
+    app.add(good[0])
+    assert app.save(path) == path and "Saved to" in app.message
+    copy = tmp_path / "copies" / "VF-copy.json"
+    assert app.save(copy) == copy
+    app.add(good[1])
+    assert app.save(copy) == copy  # the copy holds this very run: written again
+    assert RunRecord.from_dict(json.loads(copy.read_text())) == app.record
+    old = app.record.to_dict() | {"run_id": None}  # an old record without a run id
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    assert app.save(tmp_path / "old.json") == tmp_path / "old.json"

@@ -49,6 +49,7 @@ from ..errors import (
     SaveError,
     SessionInUseError,
     TutorError,
+    WrongRunError,
 )
 from ..fileio import check_file_name, read_json
 from ..framework import RunRecord, TeachingRun, Trainee
@@ -205,8 +206,30 @@ class TutorApp:
         )
 
     def _matches(self, record: RunRecord) -> bool:
-        mine = self._fresh_record_like()
-        return record.same_run(mine) and record.trainee.key == self.trainee.key
+        return self._not_this_run(record) is None
+
+    def _not_this_run(self, record: RunRecord, mine: RunRecord | None = None) -> str | None:
+        """Why ``record`` (read from a file) is not this tutor's run; None when it is.
+
+        The one check before a file is written: on opening (resume, Try again) and on
+        Save to a chosen path. Another experiment, task, condition, run number, practice
+        flag or trainee is another run. ``mine`` is the run as it stands: then another run
+        id (both having one) is another run too. Without it the run this tutor was asked
+        for is compared, since opening a file takes its run over, id and all.
+        """
+        wanted = self._fresh_record_like() if mine is None else mine
+        if not record.same_run(wanted) or record.trainee.key != wanted.trainee.key:
+            return (
+                f"it holds {record.trainee.name}'s {record.label}, not "
+                f"{wanted.trainee.name}'s {wanted.label}"
+            )
+        ids = (record.run_id, None if mine is None else mine.run_id)
+        if None not in ids and ids[0] != ids[1]:
+            return (
+                f"it holds another {record.label} of {record.trainee.name}'s (run id "
+                f"{ids[0][:8]}, this one is {ids[1][:8]})"
+            )
+        return None
 
     def _fresh_record_like(self) -> RunRecord:
         return self.run_class.fresh_record(
@@ -255,14 +278,10 @@ class TutorApp:
             except InvalidFileError as exc:
                 self._release_lock()
                 return None, f"Could not resume from {path.name}: {exc}. It is kept untouched."
-            if not self._matches(record):
+            why = self._not_this_run(record)
+            if why is not None:
                 self._release_lock()
-                return None, (
-                    f"Could not resume from {path.name}: it holds "
-                    f"{record.trainee.name}'s {record.label}, not "
-                    f"{self.trainee.name}'s {self._fresh_record_like().label}; it is kept "
-                    "untouched."
-                )
+                return None, f"Could not resume from {path.name}: {why}; it is kept untouched."
         if not locked:
             return self._read_only_view(path, record), None
         if record is None:
@@ -320,11 +339,21 @@ class TutorApp:
                     "restart its kernel) first. This view stays read-only."
                 )
             return
-        self.read_only = False
         if path.exists():
-            self.run = self.run_class.from_record(
-                self.task, RunRecord.from_dict(read_json(path, "run file"))
-            )
+            try:
+                record = RunRecord.from_dict(read_json(path, "run file"))
+                why = self._not_this_run(record)
+                if why is not None:
+                    raise WrongRunError(why)
+                run = self.run_class.from_record(self.task, record)
+            except InvalidFileError as exc:
+                self._release_lock()
+                raise type(exc)(
+                    f"Could not take {path.name} back: {exc}. It is kept untouched and this "
+                    "view stays read-only; run the cell again to save this run beside it."
+                ) from exc
+            self.run = run
+        self.read_only = False
         self.message = f"This tutor saves the run to {path.name} again."
 
     def _take_lock(self, path: Path, wait: float | None = None) -> bool:
@@ -453,10 +482,21 @@ class TutorApp:
         """
         self._check_may_save()
         if path is not None:
+            problem = check_file_name(path)
+            if problem is not None:
+                raise InvalidParameterError(
+                    f"Nothing was saved: {problem}. Give the copy's path as text, e.g. "
+                    'folder / "VF-copy.json".'
+                )
             target = Path(path)
-            self.run.save(target)
-            self.message = f"Saved a copy to {target}."
-            return target
+            own = self.session_file is not None and (
+                os.path.realpath(target) == os.path.realpath(self.session_file)
+            )
+            if not own:
+                self._refuse_others_file(target)
+                self.run.save(target)
+                self.message = f"Saved a copy to {target}."
+                return target
         if self.session_file is None:
             self.message = "This run has no file to save to (see above)."
             return None
@@ -464,6 +504,25 @@ class TutorApp:
         self.unsaved = False
         self.message = f"Saved to {self.session_file}."
         return self.session_file
+
+    def _refuse_others_file(self, target: Path) -> None:
+        """Raise unless ``target`` is new or holds this very run: a file of another run
+        (another condition, trainee or run id) or any other file is never written over."""
+        if not target.is_file():  # a new name (or a folder: writing says so)
+            return
+        fix = (
+            f"It is kept untouched: choose another file name for the copy (e.g. "
+            f"{target.stem}-copy{target.suffix})."
+        )
+        try:
+            record = RunRecord.from_dict(read_json(target, "file"))
+        except InvalidFileError as exc:
+            raise InvalidFileError(
+                f"Nothing was saved: {target.name} is not a run file of this run ({exc}). {fix}"
+            ) from exc
+        why = self._not_this_run(record, self.record)
+        if why is not None:
+            raise WrongRunError(f"Nothing was saved over {target.name}: {why}. {fix}")
 
     @guarded
     def undo(self) -> None:
