@@ -4,6 +4,7 @@ refused on resume and left untouched."""
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import os
 import subprocess
@@ -259,3 +260,101 @@ def test_save_onto_its_own_file_a_copy_or_a_new_name_still_works(tmp_path, good)
     old = app.record.to_dict() | {"run_id": None}  # an old record without a run id
     (tmp_path / "old.json").write_text(json.dumps(old))
     assert app.save(tmp_path / "old.json") == tmp_path / "old.json"
+
+
+# ------------------------------------------------ 3. events checked against the demos
+
+
+@pytest.fixture(scope="module")
+def history(good):
+    """A record dict of two attempts: add, test, add, undo | reset, add, add, finish."""
+    run = MazeRun.new("VR", MazeTutor("VR").task, trainee=Trainee.from_name(TRAINEE))
+    run.add_demo(good[0])
+    run.test([3])
+    run.add_demo(good[1])
+    run.undo()
+    run.reset()
+    run.add_demo(good[2])
+    run.add_demo(good[3])
+    run.finish()
+    data = run.to_dict()
+    assert [e["kind"] for e in data["events"]] == [
+        "start", "add", "test", "add", "undo", "reset", "add", "add", "finish",
+    ]  # fmt: skip
+    return data
+
+
+def _edited(data, change):
+    data = json.loads(json.dumps(data))
+    change(data)
+    return data
+
+
+def _stamp(data, i, at):
+    data["events"][i]["at"] = at
+
+
+def _add_after_finish(data):
+    data["attempts"][-1]["demos"].append(data["attempts"][-1]["demos"][0])
+    data["events"].append({**data["events"][-2], "n_demos": 3})
+
+
+#: (name, change, words of the refusal)
+CONTRADICTIONS = [
+    ("time-goes-backwards", lambda d: _stamp(d, 4, "1999-12-31T23:00:00.000Z"),
+     r"events\[4\].*time goes backwards"),
+    ("an-add-claims-demo-99", lambda d: d["events"][6].update(n_demos=99),
+     r"events\[6\].*claims 99 demo\(s\) in attempt 2, which held 0"),
+    ("the-last-add-claims-99", lambda d: [e.update(n_demos=99) for e in d["events"][7:]],
+     r"events\[7\].*claims 99"),
+    ("a-finish-in-an-unfinished-attempt", lambda d: d["attempts"][-1].update(finished=False),
+     r"events\[8\].*not finished"),
+    ("an-add-after-the-finish", _add_after_finish, r"events\[9\].*after attempt 2 was finished"),
+    ("an-undo-from-no-demo", lambda d: d["events"][6].update(kind="undo", n_demos=0),
+     r"events\[6\].*'undo'"),
+    ("a-demo-dropped-from-the-file", lambda d: d["attempts"][1]["demos"].pop(),
+     r"count 2 demo\(s\) in attempt 2, but it holds 1"),
+    ("an-event-back-in-the-first-attempt", lambda d: d["events"][7].update(attempt=0),
+     r"events\[7\].*attempt 1 after attempt 2 began"),
+    ("an-add-that-begins-an-attempt", lambda d: d["events"][5].update(kind="add", n_demos=2),
+     r"events\[5\].*cannot begin attempt 2"),
+    ("a-reset-inside-an-attempt", lambda d: d["events"][3].update(kind="reset"),
+     r"events\[3\].*must begin a new attempt"),
+    ("events-that-stop-before-the-last-attempt",
+     lambda d: d.update(events=d["events"][:5]), r"end in attempt 1 of the record's 2"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("change, words", [pytest.param(*r[1:], id=r[0]) for r in CONTRADICTIONS])
+def test_a_record_whose_events_contradict_its_demos_is_refused(history, change, words):
+    with pytest.raises(InvalidFileError, match=words):
+        RunRecord.from_dict(_edited(history, change))
+
+
+def test_a_consistent_history_and_a_clock_corrected_by_ntp_are_accepted(history):
+    assert RunRecord.from_dict(history).current.n_demos == 2
+    at = history["events"][3]["at"]
+    back = (_moment_of(at) - dt.timedelta(seconds=0.4)).isoformat().replace("+00:00", "Z")
+    assert RunRecord.from_dict(_edited(history, lambda d: _stamp(d, 4, back)))
+    no_events = _edited(history, lambda d: d.update(events=[]))  # nothing to check against
+    assert RunRecord.from_dict(no_events).events == ()
+
+
+def _moment_of(at: str) -> dt.datetime:
+    return dt.datetime.fromisoformat(at.replace("Z", "+00:00"))
+
+
+def test_resuming_a_contradictory_run_file_is_refused_and_the_file_kept(tmp_path, history, good):
+    path = tmp_path / "VR.json"
+    path.write_text(json.dumps(_edited(history, lambda d: d["events"][6].update(n_demos=99))))
+    before = path.read_bytes()
+    app = MazeTutor("VR", session_file=path, trainee=TRAINEE)
+    assert "Could not resume from VR.json" in app.message and "claims 99" in app.message
+    assert "kept untouched" in app.message and app.session_file.name == "VR-2.json"
+    app.add(good[0])
+    assert app.session.n_demos == 1 and path.read_bytes() == before
+    with pytest.raises(InvalidFileError, match="VR.json: .*claims 99"):
+        MazeRun.load(path, app.task)
+    app.load(path)  # the Load button refuses it too
+    assert "Nothing was loaded" in app.message and "claims 99" in app.message
+    assert app.session.n_demos == 1 and path.read_bytes() == before
