@@ -1021,13 +1021,17 @@ def folder_replaced_by_a_file(c):
 #: (id, setup(c) -> (run path, break() after demo 1 or None, fix()), what, fix)
 SAVES = [
     ("autosave-on-a-full-disk", full_disk, r"disk is full", r"free some space"),
-    ("autosave-on-a-read-only-disk", read_only_disk, r"read-only disk", r"somewhere else"),
-    ("autosave-in-a-folder-that-cannot-be-made", lambda c: read_only_disk(c, "sub"),
-     r"read-only disk", r"somewhere else"),
-    ("autosave-through-a-file", through_a_file, r"part of the path is a file",
-     r"another folder"),
     ("autosave-after-the-folder-became-a-file", folder_replaced_by_a_file,
      r"part of the path is a file", r"another folder"),
+]  # fmt: skip
+
+#: (id, setup(c) -> (run path, None, fix()), what, fix): no lock can be taken from the start
+LOCKLESS = [
+    ("open-on-a-read-only-disk", read_only_disk, r"read-only disk", r"another folder"),
+    ("open-in-a-folder-that-cannot-be-made", lambda c: read_only_disk(c, "sub"),
+     r"read-only disk", r"another folder"),
+    ("open-through-a-file", through_a_file, r"part of the path is a file",
+     r"another folder"),
 ]  # fmt: skip
 
 
@@ -1049,6 +1053,26 @@ def test_a_failed_save_keeps_every_demo_and_the_old_file(c, setup, what, fix):
     repair()
     act(app.save)
     assert_plain(app.message, r"saved to")
+    assert not app.unsaved and saved_record(path) == app.record
+
+
+@pytest.mark.parametrize("setup, what, fix", [pytest.param(*r[1:], id=r[0]) for r in LOCKLESS])
+def test_a_run_that_cannot_be_locked_opens_read_only_and_writes_nothing(c, setup, what, fix):
+    """The lock cannot be taken, so the tutor fails closed: read-only, said in plain words;
+    once the folder is fixed, Try again takes the file and saving works."""
+    path, _, repair = setup(c)
+    app = act(lambda: c.keep(MazeTutor("VF", session_file=path, trainee=TRAINEE)))
+    assert app.read_only
+    assert_plain(app.message, what, fix)
+    assert re.search(r"cannot be locked.*read-only", app.message, re.I | re.S), app.message
+    act(app.add, c.w.good[0])
+    assert_plain(app.message, what, fix)
+    assert app.session.n_demos == 0 and file_bytes(path) is None
+    assert temp_files(path.parent) == [], "a temporary file was left behind"
+    repair()
+    act(app.try_again)
+    assert not app.read_only, app.message
+    act(app.add, c.w.good[0])
     assert not app.unsaved and saved_record(path) == app.record
 
 

@@ -283,17 +283,33 @@ def test_another_trainees_file_is_not_resumed(tmp_path, good):
 
 
 def test_a_failed_save_keeps_the_demo_and_tries_again(tmp_path, good):
-    blocker = tmp_path / "not_a_folder"
-    blocker.write_text("a file where the folder should be")
-    app = MazeTutor("VF", session_file=blocker / "VF.json")
+    folder = tmp_path / "runs"
+    app = MazeTutor("VF", session_file=folder / "VF.json")  # takes the file's lock
+    folder.rename(tmp_path / "moved")
+    folder.write_text("a file where the folder should be")
     app.add(good[0])
     assert app.session.n_demos == 1 and app.unsaved
     assert "Not saved" in app.message and "kept" in app.message
     assert "not saved yet" in app.status.value
+    folder.unlink()
+    (tmp_path / "moved").rename(folder)
+    app.add(good[1])  # the next change saves both
+    assert not app.unsaved and len(_record(folder / "VF.json")["attempts"][-1]["demos"]) == 2
+
+
+def test_a_run_whose_folder_cannot_be_made_opens_read_only(tmp_path, good):
+    """No lock can be taken (part of the path is a file): the tutor fails closed."""
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("a file where the folder should be")
+    app = MazeTutor("VF", session_file=blocker / "VF.json")
+    assert app.read_only and "cannot be locked" in app.message
+    app.add(good[0])
+    assert app.session.n_demos == 0 and "read-only" in app.message
     blocker.unlink()
     blocker.mkdir()
-    app.add(good[1])  # the next change saves both
-    assert not app.unsaved and len(_record(blocker / "VF.json")["attempts"][-1]["demos"]) == 2
+    app.try_again()
+    app.add(good[0])
+    assert not app.unsaved and len(_record(blocker / "VF.json")["attempts"][-1]["demos"]) == 1
 
 
 def test_no_exception_leaves_a_button(tmp_path, good, monkeypatch):

@@ -20,6 +20,7 @@ __all__ = [
     "InvalidPlanError",
     "SaveError",
     "SessionInUseError",
+    "LockError",
     "WrongRunError",
 ]
 
@@ -70,6 +71,11 @@ class SaveError(TutorError, OSError):
 
 class SessionInUseError(TutorError, RuntimeError):
     """Another tutor or kernel is writing this session file (it holds the file's lock)."""
+
+
+class LockError(TutorError, RuntimeError):
+    """A run file's lock cannot be taken at all (its lock file is a folder or another
+    user's, or the folder is read-only), so the run is shown read-only and nothing is saved."""
 
 
 class WrongRunError(InvalidFileError):

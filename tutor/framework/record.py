@@ -17,6 +17,11 @@ an educator and read back by the class analysis. It holds:
 - whether it was a practice run (the class analysis leaves those out) and the version
   of the tool that wrote it.
 
+A record read back is checked whole: besides every field, its events are replayed
+against its attempts (times never go backwards, demo counts follow from event to event
+and end at the demos stored, a finish only in a finished attempt), so a file whose history
+contradicts its demos is refused, never resumed.
+
 The record is immutable (frozen dataclasses of tuples): a change makes a new record with
 :func:`dataclasses.replace`, so an old value can be kept while a new one is tried (all or
 nothing). :meth:`RunRecord.to_dict` and :meth:`RunRecord.from_dict` are the one way to
@@ -74,6 +79,12 @@ EVENT_KINDS = (
 )
 #: why an attempt ended
 END_REASONS = ("", "reset", "load", "restore")
+#: events that begin a new attempt (``load`` also happens inside one)
+_BEGINS = ("start", "reset", "load", "restore")
+#: events that change no demo count
+_KEEPS_COUNT = ("start", "test", "spend", "finish")
+#: a wall clock set back by less than this (an NTP correction) is not time going backwards
+CLOCK_SLACK_SECONDS = 1.0
 
 
 def utc_now() -> str:
@@ -167,6 +178,76 @@ def _stamp(value, path: str) -> str:
     except ValueError:
         _fail(path, f"must be a date and time like 2026-12-01T09:14:03.123Z, got {text!r}")
     return text
+
+
+def _moment(text: str) -> datetime:
+    """A checked stamp as an aware datetime (a stamp without a zone is UTC)."""
+    moment = datetime.fromisoformat(text.replace("Z", "+00:00"))
+    return moment if moment.tzinfo is not None else moment.replace(tzinfo=UTC)
+
+
+def _check_history(record) -> None:
+    """Refuse a record whose events contradict each other or its attempts.
+
+    Replays the events: their times never go backwards (by more than
+    :data:`CLOCK_SLACK_SECONDS`); each names the attempt in progress or begins the next
+    one (a reset, a Load that replaces the run, a restore); each event's demo count
+    follows from the one before (an add one more, an undo one fewer, a test, spend or
+    finish the same); a finish is in a finished attempt and no demo is added or taken
+    back after it; and the counts end where the attempts' stored demos do.
+    """
+    events = record.events
+    if not events:
+        return
+    attempts = record.attempts
+    current, count, finished = 0, 0, False
+    ends: dict[int, int] = {}
+    last = None
+    for i, e in enumerate(events):
+        where = f"events[{i}]"
+        moment = _moment(e.at)
+        if last is not None and (last - moment).total_seconds() > CLOCK_SLACK_SECONDS:
+            _fail(where, f"is stamped {e.at}, before the event ahead of it: time goes backwards")
+        last = moment if last is None else max(last, moment)
+        if e.attempt < current:
+            _fail(where, f"names attempt {e.attempt + 1} after attempt {current + 1} began")
+        if e.attempt > current + 1 or (i == 0 and e.attempt > 0):
+            _fail(where, f"names attempt {e.attempt + 1}, but attempt {current + 1} was the last")
+        if e.attempt == current + 1:
+            if e.kind not in _BEGINS:
+                _fail(where, f"a {e.kind!r} cannot begin attempt {e.attempt + 1}")
+            if e.kind in ("start", "reset") and e.n_demos != 0:
+                _fail(where, f"a {e.kind!r} begins an empty attempt, not one of {e.n_demos} demos")
+            current, count, finished = e.attempt, e.n_demos, False
+            ends[current] = count
+            continue
+        if e.kind in ("reset", "restore"):
+            _fail(where, f"a {e.kind!r} must begin a new attempt, not be in attempt {current + 1}")
+        if finished and e.kind in ("add", "undo", "load"):
+            _fail(where, f"an {e.kind!r} after attempt {current + 1} was finished")
+        expected = {"add": count + 1, "undo": count - 1}.get(e.kind, count)
+        if e.kind == "load" and e.n_demos >= count:
+            expected = e.n_demos  # the demos of a file, added all at once
+        if e.n_demos != expected or expected < 0:
+            _fail(
+                where,
+                f"an {e.kind!r} event claims {e.n_demos} demo(s) in attempt {current + 1}, "
+                f"which held {count} before it",
+            )
+        if e.kind == "finish":
+            if not attempts[current].finished:
+                _fail(where, f"finishes attempt {current + 1}, which is not finished")
+            finished = True
+        count = e.n_demos
+        ends[current] = count
+    if current != len(attempts) - 1:
+        _fail("events", f"end in attempt {current + 1} of the record's {len(attempts)}")
+    for k, n in ends.items():
+        if attempts[k].n_demos != n:
+            _fail(
+                "events",
+                f"count {n} demo(s) in attempt {k + 1}, but it holds {attempts[k].n_demos}",
+            )
 
 
 def _run_id(value, path: str) -> str | None:
@@ -595,4 +676,5 @@ class RunRecord:
         for i, e in enumerate(record.events):
             if e.attempt >= len(record.attempts):
                 _fail(f"events[{i}]", f"names attempt {e.attempt + 1} of {len(record.attempts)}")
+        _check_history(record)
         return record

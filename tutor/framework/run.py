@@ -22,6 +22,7 @@ saved run replays with the same :math:`r` whatever the selector (even a random o
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 from typing import ClassVar
 
 import numpy as np
@@ -472,4 +473,10 @@ class TeachingRun:
 
     @classmethod
     def load(cls, path, task: Task, clock=utc_now):
-        return cls.from_dict(read_json(path, "run file"), task, clock)
+        """The run saved in ``path`` (InvalidFileError naming the file when it is refused:
+        unreadable, another run, or events that contradict its demos; it is not changed)."""
+        data = read_json(path, "run file")
+        try:
+            return cls.from_dict(data, task, clock)
+        except InvalidFileError as exc:
+            raise type(exc)(f"{Path(path).name}: {exc}") from exc

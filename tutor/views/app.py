@@ -10,7 +10,10 @@
 - **One writer per file.** The tutor that owns a run file holds a lock on it
   (:mod:`filelock`; the operating system releases it when a kernel dies, so a killed
   kernel's lock is taken over safely). A second tutor or kernel on the same file is told
-  so in plain words and gets a read-only view.
+  so in plain words and gets a read-only view. A lock that cannot be taken at all (its
+  lock file is a folder or another user's, the folder is read-only) fails closed: the
+  run is shown read-only, the panel says why, and Save raises
+  :class:`~tutor.errors.LockError`. Nothing is written without the lock.
 - **Autosave** after every change, atomically (:func:`tutor.fileio.write_json`). A failed
   save (disk full, no permission, a folder that is a file) keeps everything in memory,
   says so in the panel, and is tried again at the next change or with Save.
@@ -26,6 +29,7 @@
 
 from __future__ import annotations
 
+import errno
 import functools
 import html
 import logging
@@ -38,7 +42,15 @@ import ipywidgets as w
 import numpy as np
 
 from ..demofiles import DEMOS_FORMAT, load_demos
-from ..errors import InvalidFileError, InvalidParameterError, SaveError, TutorError
+from ..errors import (
+    InvalidFileError,
+    InvalidParameterError,
+    LockError,
+    SaveError,
+    SessionInUseError,
+    TutorError,
+    WrongRunError,
+)
 from ..fileio import check_file_name, read_json
 from ..framework import RunRecord, TeachingRun, Trainee
 from ..framework.record import RECORD_FORMAT
@@ -56,6 +68,11 @@ LOCK_WAIT_SECONDS = 2.0
 _OWNERS: dict[str, weakref.ref] = {}
 #: how many sibling names (NF-2.json ...) are tried when a file holds another run
 _MAX_SIBLINGS = 50
+#: what a refused action says while another tutor holds the run
+_IN_USE = (
+    "This view is read-only because the run is open in another tutor: nothing was changed. "
+    "Use the other one, or close it and run this cell again."
+)
 
 
 def _check_path(path, what: str = "session_file") -> str:
@@ -67,6 +84,27 @@ def _check_path(path, what: str = "session_file") -> str:
             f'{what}=folder / "VF.json", with a shorter name if it is too long'
         )
     return os.fspath(path)
+
+
+def _lock_trouble(lock_path: Path, exc: OSError) -> str:
+    """Why the lock file ``lock_path`` cannot be taken, in plain words."""
+    name = lock_path.name
+    not_yours = (
+        f"its lock file {name} or its folder may not be written by you (it may belong to "
+        "another user)"
+    )
+    reasons = {
+        errno.EISDIR: f"its lock file {name} is a folder",
+        errno.EACCES: not_yours,
+        errno.EPERM: not_yours,
+        errno.EROFS: "the folder is on a read-only disk",
+        errno.ENOTDIR: "part of the path is a file, not a folder",
+        errno.EEXIST: "part of the path is a file, not a folder",
+        errno.ENOSPC: "the disk is full",
+        errno.EDQUOT: "your disk quota is used up",
+        errno.ENAMETOOLONG: "its path is too long",
+    }
+    return reasons.get(exc.errno) or f"{exc.strerror or exc}"
 
 
 def guarded(method):
@@ -131,6 +169,10 @@ class TutorApp:
         self.read_only = False
         self.unsaved = False
         self._lock = None
+        #: why the lock cannot be taken at all (None: it can, or another tutor holds it)
+        self._lock_problem: str | None = None
+        #: what a refused action says while the view is read-only
+        self._refusal = ""
         self._reset_asked = -1e9
         self.session_file = None if session_file is None else Path(_check_path(session_file))
         self.run = self._open()
@@ -164,8 +206,30 @@ class TutorApp:
         )
 
     def _matches(self, record: RunRecord) -> bool:
-        mine = self._fresh_record_like()
-        return record.same_run(mine) and record.trainee.key == self.trainee.key
+        return self._not_this_run(record) is None
+
+    def _not_this_run(self, record: RunRecord, mine: RunRecord | None = None) -> str | None:
+        """Why ``record`` (read from a file) is not this tutor's run; None when it is.
+
+        The one check before a file is written: on opening (resume, Try again) and on
+        Save to a chosen path. Another experiment, task, condition, run number, practice
+        flag or trainee is another run. ``mine`` is the run as it stands: then another run
+        id (both having one) is another run too. Without it the run this tutor was asked
+        for is compared, since opening a file takes its run over, id and all.
+        """
+        wanted = self._fresh_record_like() if mine is None else mine
+        if not record.same_run(wanted) or record.trainee.key != wanted.trainee.key:
+            return (
+                f"it holds {record.trainee.name}'s {record.label}, not "
+                f"{wanted.trainee.name}'s {wanted.label}"
+            )
+        ids = (record.run_id, None if mine is None else mine.run_id)
+        if None not in ids and ids[0] != ids[1]:
+            return (
+                f"it holds another {record.label} of {record.trainee.name}'s (run id "
+                f"{ids[0][:8]}, this one is {ids[1][:8]})"
+            )
+        return None
 
     def _fresh_record_like(self) -> RunRecord:
         return self.run_class.fresh_record(
@@ -214,14 +278,10 @@ class TutorApp:
             except InvalidFileError as exc:
                 self._release_lock()
                 return None, f"Could not resume from {path.name}: {exc}. It is kept untouched."
-            if not self._matches(record):
+            why = self._not_this_run(record)
+            if why is not None:
                 self._release_lock()
-                return None, (
-                    f"Could not resume from {path.name}: it holds "
-                    f"{record.trainee.name}'s {record.label}, not "
-                    f"{self.trainee.name}'s {self._fresh_record_like().label}; it is kept "
-                    "untouched."
-                )
+                return None, f"Could not resume from {path.name}: {why}; it is kept untouched."
         if not locked:
             return self._read_only_view(path, record), None
         if record is None:
@@ -238,12 +298,22 @@ class TutorApp:
         return run, None
 
     def _read_only_view(self, path: Path, record: RunRecord | None) -> TeachingRun:
-        self.read_only = True
-        self.message = (
-            f"{path.name} is open in another tutor (another kernel or browser tab). To "
-            "keep that run safe, this view is read-only: nothing you do here is saved. "
-            "Close the other one (or restart its kernel), then press Try again."
-        )
+        if self._lock_problem is not None:
+            self._go_read_only(
+                f"{path.name} cannot be locked ({self._lock_problem}), so this tutor shows "
+                "it read-only: nothing you do here is saved. Ask your educator, or choose "
+                "another folder; once it is fixed, press Try again.",
+                f"This view is read-only because {path.name} cannot be locked "
+                f"({self._lock_problem}): nothing was changed. Ask your educator, or choose "
+                "another folder.",
+            )
+        else:
+            self._go_read_only(
+                f"{path.name} is open in another tutor (another kernel or browser tab). To "
+                "keep that run safe, this view is read-only: nothing you do here is saved. "
+                "Close the other one (or restart its kernel), then press Try again.",
+                _IN_USE,
+            )
         if record is None:
             return self._fresh()
         try:
@@ -258,24 +328,43 @@ class TutorApp:
             return
         path = self.session_file
         if not self._take_lock(path):
-            self.message = (
-                f"{path.name} is still open in another tutor: close that one (or restart "
-                "its kernel) first. This view stays read-only."
-            )
+            if self._lock_problem is not None:
+                self.message = (
+                    f"{path.name} still cannot be locked ({self._lock_problem}). This view "
+                    "stays read-only: ask your educator, or choose another folder."
+                )
+            else:
+                self.message = (
+                    f"{path.name} is still open in another tutor: close that one (or "
+                    "restart its kernel) first. This view stays read-only."
+                )
             return
-        self.read_only = False
         if path.exists():
-            self.run = self.run_class.from_record(
-                self.task, RunRecord.from_dict(read_json(path, "run file"))
-            )
+            try:
+                record = RunRecord.from_dict(read_json(path, "run file"))
+                why = self._not_this_run(record)
+                if why is not None:
+                    raise WrongRunError(why)
+                run = self.run_class.from_record(self.task, record)
+            except InvalidFileError as exc:
+                self._release_lock()
+                raise type(exc)(
+                    f"Could not take {path.name} back: {exc}. It is kept untouched and this "
+                    "view stays read-only; run the cell again to save this run beside it."
+                ) from exc
+            self.run = run
+        self.read_only = False
         self.message = f"This tutor saves the run to {path.name} again."
 
     def _take_lock(self, path: Path, wait: float | None = None) -> bool:
-        """Hold ``path``'s lock; False when another kernel holds it.
+        """Hold ``path``'s lock; False when another kernel holds it or it cannot be taken.
 
         A tutor made earlier in this same kernel on the same file (a cell run again) hands
         its file over: it saves, becomes read-only and says so. Another kernel's lock is
         waited for a moment (a reloaded Voila page's old kernel may be shutting down).
+        A lock that cannot be taken at all (an OSError: the lock file is a folder or
+        another user's, the folder is read-only) fails closed: False, with the reason in
+        ``_lock_problem`` (None when another kernel holds the lock).
         """
         from filelock import FileLock, Timeout
 
@@ -290,15 +379,18 @@ class TutorApp:
         ):
             owner._hand_over()
         wait = LOCK_WAIT_SECONDS if wait is None else wait
-        lock = FileLock(str(path.with_name(f".{path.name}.lock")), timeout=wait)
+        lock_path = path.with_name(f".{path.name}.lock")
+        lock = FileLock(str(lock_path), timeout=wait)
+        self._lock_problem = None
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             lock.acquire()
         except Timeout:
             return False
-        except OSError as exc:  # no lock possible (read-only folder): saving will say so
-            log.warning("no lock on %s: %s", path, exc)
-            return True
+        except OSError as exc:  # no lock possible: fail closed (read-only), never open
+            self._lock_problem = _lock_trouble(lock_path, exc)
+            log.warning("no lock on %s (%s): read-only", path, exc)
+            return False
         self._lock = lock
         _OWNERS[key] = weakref.ref(self)
         return True
@@ -307,11 +399,11 @@ class TutorApp:
         """A newer tutor in this kernel takes this one's file: save, let go, say so."""
         self._autosave()
         self._release_lock()
-        self.read_only = True
-        self.message = (
+        self._go_read_only(
             "This tutor was replaced by a newer one on the same run (its cell was run "
             "again), which carries on with every demonstration. Use that one; this view is "
-            "read-only now."
+            "read-only now.",
+            _IN_USE,
         )
         try:
             self.refresh()
@@ -324,9 +416,23 @@ class TutorApp:
             self._lock = None
 
     def close(self) -> None:
-        """Save and let go of the run's file (another tutor may then open it)."""
+        """Save and let go of the run's file (another tutor may then open it); this view
+        is read-only afterwards."""
         self._autosave()
         self._release_lock()
+        if self.session_file is not None and not self.read_only:
+            self._go_read_only(
+                "",
+                "This tutor was closed, so it is read-only: nothing was changed. Run its "
+                "cell again to carry on.",
+            )
+
+    def _go_read_only(self, message: str, refusal: str) -> None:
+        """Show the run read-only: ``message`` now, ``refusal`` for every refused action."""
+        self.read_only = True
+        self._refusal = refusal
+        if message:
+            self.message = message
 
     def __del__(self):
         try:
@@ -337,7 +443,7 @@ class TutorApp:
     # ------------------------------------------------------------ saving
 
     def _autosave(self) -> None:
-        if self.session_file is None or self.read_only:
+        if self.session_file is None or self.read_only or self._lock is None:
             return
         try:
             self.run.save(self.session_file)
@@ -352,25 +458,45 @@ class TutorApp:
 
     def _refuse_if_read_only(self) -> bool:
         if self.read_only:
-            self.message = (
-                "This view is read-only because the run is open in another tutor: nothing "
-                "was changed. Use the other one, or close it and run this cell again."
-            )
+            self.message = self._refusal
             self.refresh()
         return self.read_only
+
+    def _check_may_save(self) -> None:
+        """Raise LockError (the lock cannot be taken) or SessionInUseError (another tutor
+        holds the run) when this view is read-only: nothing is saved then."""
+        if not self.read_only:
+            return
+        if self._lock_problem is not None:
+            raise LockError(f"Nothing was saved. {self._refusal}")
+        raise SessionInUseError(f"Nothing was saved. {self._refusal}")
 
     # ------------------------------------------------------------ actions
 
     @guarded
     def save(self, path=None) -> Path | None:
-        """Save the run (to its file by default, or to ``path``); returns the path written."""
+        """Save the run (to its file by default, or to ``path``); returns the path written.
+
+        A read-only view saves nothing: LockError when the run's file cannot be locked,
+        SessionInUseError when another tutor holds it (shown in the panel).
+        """
+        self._check_may_save()
         if path is not None:
+            problem = check_file_name(path)
+            if problem is not None:
+                raise InvalidParameterError(
+                    f"Nothing was saved: {problem}. Give the copy's path as text, e.g. "
+                    'folder / "VF-copy.json".'
+                )
             target = Path(path)
-            self.run.save(target)
-            self.message = f"Saved a copy to {target}."
-            return target
-        if self._refuse_if_read_only():
-            return None
+            own = self.session_file is not None and (
+                os.path.realpath(target) == os.path.realpath(self.session_file)
+            )
+            if not own:
+                self._refuse_others_file(target)
+                self.run.save(target)
+                self.message = f"Saved a copy to {target}."
+                return target
         if self.session_file is None:
             self.message = "This run has no file to save to (see above)."
             return None
@@ -378,6 +504,25 @@ class TutorApp:
         self.unsaved = False
         self.message = f"Saved to {self.session_file}."
         return self.session_file
+
+    def _refuse_others_file(self, target: Path) -> None:
+        """Raise unless ``target`` is new or holds this very run: a file of another run
+        (another condition, trainee or run id) or any other file is never written over."""
+        if not target.is_file():  # a new name (or a folder: writing says so)
+            return
+        fix = (
+            f"It is kept untouched: choose another file name for the copy (e.g. "
+            f"{target.stem}-copy{target.suffix})."
+        )
+        try:
+            record = RunRecord.from_dict(read_json(target, "file"))
+        except InvalidFileError as exc:
+            raise InvalidFileError(
+                f"Nothing was saved: {target.name} is not a run file of this run ({exc}). {fix}"
+            ) from exc
+        why = self._not_this_run(record, self.record)
+        if why is not None:
+            raise WrongRunError(f"Nothing was saved over {target.name}: {why}. {fix}")
 
     @guarded
     def undo(self) -> None:
@@ -568,7 +713,9 @@ class TutorApp:
         self.bring_back.layout.display = show
         self.upload.disabled = self.read_only or self.finished
         self.retry.layout.display = "flex" if self.read_only else "none"
-        if self.read_only:
+        if self.read_only and self._lock_problem is not None:
+            state = "read-only (its file cannot be locked)"
+        elif self.read_only:
             state = "read-only (open in another tutor)"
         elif self.session_file is None:
             state = "not saved to a file"
