@@ -45,6 +45,7 @@ from ..framework.wording import plural
 from ..runtime import headless, sessions_root
 from .class_report import analyse_class, as_sentence, class_figure, save_class
 from .classroom import read_class
+from .tables import readable_table
 
 __all__ = ["ClassDashboard", "class_dashboard", "CLASS_DIR_ENV", "default_class_folder"]
 
@@ -60,15 +61,10 @@ def default_class_folder() -> Path:
     return Path(value) if value else sessions_root()
 
 
-def _table(frame, float_format="{:.3f}") -> str:
-    """A small accessible HTML table (header cells, a caption-free plain style)."""
-    return frame.to_html(
-        classes="lfd-class-table",
-        border=0,
-        na_rep="–",
-        float_format=lambda v: float_format.format(v),
-        escape=True,
-    )
+def _table(frame) -> str:
+    """A small accessible HTML table (header cells, a caption-free plain style), its cells
+    as a person reads them (:func:`.tables.readable_table`: η in %, a dash for none)."""
+    return readable_table(frame).to_html(classes="lfd-class-table", border=0, escape=True)
 
 
 def _list(items: list[str], empty: str) -> str:
