@@ -291,7 +291,7 @@ def optimal_sentence(task, n_demos: int | None = None) -> str:
         head = f"you used {plural(n_demos, 'demonstration', 'demonstrations')}; {head}"
     return (
         f"{head[0].upper()}{head[1:]}, so the best possible η by this experiment's score is "
-        f"{ref.best_eta:.1%}."
+        f"{percent(ref.best_eta)}."
     )
 
 
