@@ -160,7 +160,7 @@ def test_experiment_2_class(tmp_path):
     assert not analysis["class"]["tested"]  # 2 trainees per condition
     assert [f.kind for f in result.not_counted] == ["unfinished"]
     report = format_class_report(result, analysis)
-    assert "mean eta (paper)" in report and "still to do: run 3" in report
+    assert "mean η (paper)" in report and "still to do: run 3" in report
     assert "Failures over all counted runs" in report
 
 

@@ -23,7 +23,7 @@ def test_it_shows_the_class_the_tests_the_trainees_and_the_problems(small_class)
     board = ClassDashboard(small_class)
     assert "<b>16 runs</b> counted from <b>6 trainees</b>" in board.status.value
     assert "2 files not counted" in board.status.value
-    assert "median eta (paper)" in board.beside.value
+    assert "median η (paper)" in board.beside.value
     assert board.figure.value.startswith('<img src="data:image/png;base64,iVBOR')
     assert 'alt="Box plots of the class' in board.figure.value
     assert "This class: repeated-measures ANOVA F(2,6)" in board.tests.value  # 4 whole

@@ -156,7 +156,7 @@ def test_save_export_and_compare(tmp_path, good):
         app.finish()
         runs.append(app)
     text = compare_runs(runs)
-    assert "NF: eta" in text and "7.6%" in text and "13.4%" in text and "14.0%" in text
+    assert "NF: η" in text and "7.6%" in text and "13.4%" in text and "14.0%" in text
     assert "one person" in text
     exported = json.loads((tmp_path / "VF.json").read_text())
     assert exported["format"] == "lfd-tutor-run" and exported["condition"] == "VF"

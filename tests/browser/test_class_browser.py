@@ -80,7 +80,7 @@ def test_dashboard_in_voila(voila_page, workdir, dashboard_url, class_folder, ar
     assert "2 files not counted" in _status(page)
     beside = page.locator(".lfd-class-beside table")
     assert beside.locator("tbody tr").count() == 3  # NF, VF, VR
-    assert "median eta (paper)" in beside.inner_text()
+    assert "median η (paper)" in beside.inner_text()
     figure = page.locator(".lfd-class-figure img")
     figure.wait_for(state="visible")
     assert figure.bounding_box()["width"] > 400

@@ -14,8 +14,10 @@ b the demonstration set with M = |b| demos.
   ``"final"`` (Experiment 2): the paper states no 90 % rule; eta = eps / |b| of the
   whole session, eps judged after the last demo and |b| every demo given.
 
-Every score of a run (the tutor's, the simulated cohorts', a class's) comes from
-:func:`run_score`, so they agree.
+Every score of a run (the after-Finish summary, the results cell, the simulated
+cohorts', a class's) is :meth:`tutor.framework.run.TeachingRun.score`, which calls
+:func:`run_score` with the rule of the run's own experiment (:func:`rule_of`), so they
+agree; no caller picks a rule by default.
 """
 
 from __future__ import annotations
@@ -34,6 +36,8 @@ __all__ = [
     "final_score",
     "run_score",
     "SCORING_RULES",
+    "EXPERIMENT_RULES",
+    "rule_of",
 ]
 
 
@@ -104,6 +108,26 @@ def final_score(efficacies, target: float = 0.9) -> SessionScore:
 
 #: the paper's scoring rule of each experiment, by name
 SCORING_RULES = {"target": session_score, "final": final_score}
+
+
+#: the scoring rule of each of the paper's experiments (a run's rule comes from here)
+EXPERIMENT_RULES = {1: "target", 2: "final"}
+
+
+def rule_of(experiment) -> str:
+    """The scoring rule of the paper's ``experiment`` (1: ``"target"``, 2: ``"final"``).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``experiment`` is not 1 or 2.
+    """
+    if isinstance(experiment, bool) or experiment not in EXPERIMENT_RULES:
+        raise InvalidParameterError(
+            f"experiment must be 1 (maze) or 2 (pick-and-place) to have a scoring rule, "
+            f"got {experiment!r}"
+        )
+    return EXPERIMENT_RULES[experiment]
 
 
 def run_score(efficacies, rule: str, target: float = 0.9) -> SessionScore:

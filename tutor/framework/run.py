@@ -30,6 +30,7 @@ import numpy as np
 from ..errors import InvalidFileError, InvalidParameterError, TutorError, WrongRunError
 from ..fileio import read_json, write_json
 from .feedback import reveal
+from .metrics import rule_of
 from .record import Attempt, Demo, Event, RunRecord, Test, Trainee, utc_now
 from .session import FeedbackRecord, TeachingSession
 from .task import Task
@@ -72,8 +73,6 @@ class TeachingRun:
     experiment: ClassVar[int] = 0
     #: condition name -> feedback mode
     conditions: ClassVar[dict[str, str]] = {}
-    #: the paper's scoring rule for the experiment (:data:`tutor.framework.metrics.SCORING_RULES`)
-    score_rule: ClassVar[str] = "target"
     #: "adaptive" conditions: condition -> (selector name, k) (:mod:`.selectors`)
     adaptive: ClassVar[dict[str, tuple[str, int]]] = {}
 
@@ -176,9 +175,16 @@ class TeachingRun:
     def finished(self) -> bool:
         return self._record.finished
 
+    @property
+    def score_rule(self) -> str:
+        """The scoring rule of the run's experiment (:func:`tutor.framework.metrics.rule_of`)."""
+        return rule_of(self.experiment)
+
     def score(self, target: float = 0.9):
-        """The run's score by its experiment's rule (the same for tutor, cohort and class)."""
-        return self.session.score(target, self.score_rule)
+        """The run's score by its own experiment's rule: the one score of a run, shown in
+        the after-Finish summary, the results cell, the class analysis, the dashboard and
+        the cohort tables alike. ``target`` is Experiment 1's coverage (the paper's 90 %)."""
+        return self.session.score(rule=self.score_rule, target=target)
 
     def visibility(self, extra_shown=()):
         """What the trainee may see now (:func:`tutor.framework.feedback.reveal`)."""

@@ -214,9 +214,14 @@ class TeachingSession:
             raise InvalidParameterError("no demo yet, so the robot has realised nothing")
         return self._realisations[step]
 
-    def score(self, target: float = 0.9, rule: str = "target") -> SessionScore:
-        """The paper's score (rule ``"target"``: demos to first reach ``target`` coverage
-        and eta there, Experiment 1; ``"final"``: eta after the last demo, Experiment 2)."""
+    def score(self, *, rule: str, target: float = 0.9) -> SessionScore:
+        """The session scored by the named rule (``"target"``: demos to first reach
+        ``target`` coverage and eta there, Experiment 1; ``"final"``: eta after the last
+        demo, Experiment 2).
+
+        The rule has no default: a session does not know its experiment. A run's score
+        is :meth:`tutor.framework.run.TeachingRun.score`, by its own experiment's rule.
+        """
         return run_score([r.efficacy for r in self._history], rule, target)
 
     # ---------------------------------------------------------------- teaching

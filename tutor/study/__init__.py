@@ -4,6 +4,7 @@
 - :mod:`.stats`: the paper's statistics with pingouin, the failure table, conclusions.
 - :mod:`.figures`: the paper-style figures (they take the result frames only).
 - :mod:`.report`: text tables beside the paper's numbers, files, robustness over seeds.
+- :mod:`.tables`: any table as a person reads it (η and ε in %, a dash for no number).
 - :mod:`.paper`: the numbers the paper reports.
 - :mod:`.optimal`: the optimal (greedy machine) teacher, its pair bound and the teaching
   dimension (``python -m tutor.study.optimal --out tutor/assets/optimal.json``).

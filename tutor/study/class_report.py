@@ -27,10 +27,12 @@ import pandas as pd
 
 from .. import paper
 from ..errors import SaveError
+from ..framework.wording import NOT_A_NUMBER, plural
 from . import stats
 from .classroom import ClassResult
 from .cohort import EXPERIMENTS
 from .report import _jsonable, check_out_dir, load_result, test_lines
+from .tables import has_no_number, readable_label, readable_table
 
 __all__ = [
     "MIN_PER_CONDITION",
@@ -43,6 +45,12 @@ __all__ = [
 
 #: the fewest whole trainees per condition for the paper's tests (below it: description only)
 MIN_PER_CONDITION = 3
+
+#: what a dash means in the class's tables (report and dashboard)
+BESIDE_LEGEND = (
+    f"{NOT_A_NUMBER} = no number yet: no counted run in that condition, or (simulated, same "
+    "size) no trainee there has finished every run"
+)
 
 
 def _counts(runs: pd.DataFrame, experiment: int) -> dict[str, int]:
@@ -203,8 +211,8 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
     task = "maze" if exp == 1 else "pick-and-place"
     lines = [
         f"Experiment {exp} ({task}) of the class in {result.source}",
-        f"{len(result.runs)} runs counted from {counted} trainees; {whole} trainees "
-        f"finished every {'condition' if exp == 1 else 'run'}.",
+        f"{plural(len(result.runs), 'run')} counted from {plural(counted, 'trainee')}; "
+        f"{plural(whole, 'trainee')} finished every {'condition' if exp == 1 else 'run'}.",
         "",
     ]
     if result.runs.empty:
@@ -212,13 +220,17 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
             "No finished run of this experiment was found, so there is nothing to analyse yet."
         )
     else:
-        fmt = {"float_format": lambda v: f"{v:.3f}", "na_rep": "–"}
-        lines.append(f"The class's {analysis['measure']} beside the paper's and a simulated")
+        measure = readable_label(analysis["measure"])
+        lines.append(f"The class's {measure} beside the paper's and a simulated")
         lines.append("class of the same size (drawn from the bundled simulated cohort):")
-        lines.append(analysis["beside"].to_string(**fmt))
+        beside = readable_table(analysis["beside"])
+        descriptive = readable_table(analysis["descriptive"])
+        lines.append(beside.to_string())
         lines.append("")
         lines.append("Per condition (every counted run):")
-        lines.append(analysis["descriptive"].to_string(**fmt))
+        lines.append(descriptive.to_string())
+        if has_no_number(beside) or has_no_number(descriptive):
+            lines.append(f"({BESIDE_LEGEND})")
         lines.append("")
         lines += _test_lines(analysis["class"], exp, "This class")
         lines += _test_lines(analysis["simulated"], exp, "Simulated, same size")

@@ -244,8 +244,9 @@ def run_rows(run, base: dict, ambiguity: float | None, target: float):
             }
         )
     last = history[-1]
-    sc = session.score(target)  # demos to the target coverage, whatever the rule
-    eta = run.score(target).efficiency  # the paper's score of this experiment
+    # demos to the target coverage (a column of its own, whatever the experiment)
+    sc = session.score(rule="target", target=target)
+    eta = run.score(target).efficiency  # the run's one score, by its experiment's rule
     row = {
         **base,
         "n_demos": last.n_demos,

@@ -41,10 +41,11 @@ from pathlib import Path
 import ipywidgets as w
 
 from ..errors import InvalidParameterError, TutorError
-from ..framework.wording import plural
+from ..framework.wording import percent, plural
 from ..runtime import headless, sessions_root
-from .class_report import analyse_class, as_sentence, class_figure, save_class
+from .class_report import BESIDE_LEGEND, analyse_class, as_sentence, class_figure, save_class
 from .classroom import read_class
+from .tables import has_no_number, readable_label, readable_table
 
 __all__ = ["ClassDashboard", "class_dashboard", "CLASS_DIR_ENV", "default_class_folder"]
 
@@ -60,21 +61,28 @@ def default_class_folder() -> Path:
     return Path(value) if value else sessions_root()
 
 
-def _table(frame, float_format="{:.3f}") -> str:
-    """A small accessible HTML table (header cells, a caption-free plain style)."""
-    return frame.to_html(
-        classes="lfd-class-table",
-        border=0,
-        na_rep="–",
-        float_format=lambda v: float_format.format(v),
-        escape=True,
-    )
+#: how every text block of the dashboard wraps: between words only (JupyterLab gives a
+#: ``<pre>`` in an output ``word-break: break-all``, which cut "finished" into "finishe d");
+#: a word too long for the line by itself (a long path) may still break
+WRAP_WORDS = "word-break:normal;overflow-wrap:break-word;hyphens:manual"
+
+
+def _table(frame, legend: str = "") -> str:
+    """A small accessible HTML table (header cells, a caption-free plain style), its cells
+    as a person reads them (:func:`.tables.readable_table`: η in %, a dash for none), and
+    under it ``legend`` when a cell has no number."""
+    table = readable_table(frame)
+    out = table.to_html(classes="lfd-class-table", border=0, escape=True)
+    out = f'<div style="{WRAP_WORDS}">{out}</div>'
+    if legend and has_no_number(table):
+        out += f'<p class="lfd-class-legend" style="{WRAP_WORDS}">{html.escape(legend)}</p>'
+    return out
 
 
 def _list(items: list[str], empty: str) -> str:
     if not items:
-        return f"<p>{html.escape(empty)}</p>"
-    return "<ul>" + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
+        return f'<p style="{WRAP_WORDS}">{html.escape(empty)}</p>'
+    return f'<ul style="{WRAP_WORDS}">' + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
 
 
 def check_board_options(experiment, refresh_seconds):
@@ -150,7 +158,8 @@ class ClassDashboard:
         self.save_button.add_class("lfd-class-save")
         self.rehearse_button = w.Button(
             description="Try a simulated class",
-            tooltip="write a class of 30 simulated trainees to a temporary folder and show it",
+            tooltip="write a class of simulated trainees (30 for Experiment 1, 36 for "
+            "Experiment 2) to a temporary folder and show it",
         )
         self.rehearse_button.add_class("lfd-class-rehearse")
         self.status = w.HTML()
@@ -210,7 +219,8 @@ class ClassDashboard:
     def _say(self, text: str, problem: bool = False) -> None:
         colour = "#8b0000" if problem else "inherit"
         self.status.value = (
-            f'<p role="status" aria-live="polite" style="color:{colour}">{text}</p>'
+            f'<p role="status" aria-live="polite" style="color:{colour};{WRAP_WORDS}">'
+            f"{text}</p>"
         )
 
     def refresh(self) -> None:
@@ -280,7 +290,7 @@ class ClassDashboard:
             self.figure.layout.display = "none"
             self.figure_caption.value = ""
         else:
-            self.beside.value = _table(analysis["beside"])
+            self.beside.value = _table(analysis["beside"], BESIDE_LEGEND)
             fig = class_figure(result, analysis)
             buffer = io.BytesIO()
             fig.savefig(buffer, format="png", dpi=90)
@@ -295,8 +305,7 @@ class ClassDashboard:
             )
             self.figure.layout.display = ""
             self.figure_caption.value = (
-                "<p><i>The class's η per condition (boxes: every counted run; red diamonds: "
-                "the paper; grey triangles: a simulated class of the same size).</i></p>"
+                f'<p style="{WRAP_WORDS}"><i>{html.escape(self._caption())}</i></p>'
             )
         self.tests.value = self._tests_html()
         lacking = trainees[~trainees.complete] if len(trainees) else trainees
@@ -316,16 +325,27 @@ class ClassDashboard:
             "Every run file of this experiment was counted.",
         )
 
+    def _caption(self) -> str:
+        """The figure's caption, from what its η panel draws (:func:`.figures.eta_caption`)."""
+        from .figures import eta_caption  # matplotlib only once there is a figure
+
+        reference = self.analysis["simulated"]["runs"]
+        what = eta_caption(self.result.experiment, "trainees", reference)
+        return f"The class's η per condition. {what[0].upper()}{what[1:]}."
+
     def _figure_text(self) -> str:
         """The figure in words (its alternative text): η per condition, class and paper."""
+        from .figures import PLOT_KINDS
+
         beside = self.analysis["beside"]
-        measure = self.analysis["measure"]
+        measure = readable_label(self.analysis["measure"])
+        kind = "Box plots" if PLOT_KINDS[self.result.experiment] == "box" else "Bar charts"
         parts = [
-            f"{c}: class {row.iloc[1]:.3f}, paper {row.iloc[2]:.3f}"
+            f"{c}: class {percent(row.iloc[1])}, paper {percent(row.iloc[2])}"
             for c, row in beside.iterrows()
             if row.iloc[0]
         ]
-        return f"Box plots of the class's η per condition; {measure}: " + "; ".join(parts)
+        return f"{kind} of the class's η per condition; {measure}: " + "; ".join(parts)
 
     def _tests_html(self) -> str:
         from .class_report import _test_lines
@@ -333,8 +353,12 @@ class ClassDashboard:
         parts = []
         for who, label in (("class", "This class"), ("simulated", "Simulated, same size")):
             lines = _test_lines(self.analysis[who], self.result.experiment, label)
-            parts.append("<pre style='white-space:pre-wrap'>" + html.escape("\n".join(lines))
-                         + "</pre>")
+            parts.append(  # lines kept as they are, wrapped between words (no <pre>)
+                f'<div class="lfd-class-lines" style="white-space:pre-wrap;{WRAP_WORDS};'
+                'font-family:var(--jp-code-font-family, monospace)">'
+                + html.escape("\n".join(lines))
+                + "</div>"
+            )
         return "".join(parts)
 
     # ------------------------------------------------------------ refreshing by itself

@@ -4,25 +4,60 @@ Each function takes the ``runs`` frame of a :class:`~tutor.study.cohort.CohortRe
 (nothing else), draws the simulation and marks the paper's numbers beside it, and, when
 given the optimal teacher's reference (:func:`tutor.tasks.optimal_reference.optimal_reference`),
 the best possible η and the fewest demonstrations as dashed lines.
+
+η and ε axes read in % (as every η the tutor writes, :func:`tutor.framework.wording.percent`).
+Each condition has one colour (:data:`CONDITION_COLOURS`), whatever conditions a figure
+holds, so notebook 04's cohorts and a class on the dashboard colour NF, RF, BF, SF alike.
+:func:`eta_caption` says in words what the η panel draws, from the same marks the panel
+is drawn with, so a caption never names a mark or a kind of plot the figure lacks.
 """
 
 from __future__ import annotations
 
+import textwrap
+
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import PercentFormatter
 
+from ..framework.wording import percent
 from . import paper
 
 __all__ = [
     "experiment1_figure",
     "experiment2_figure",
+    "eta_caption",
+    "wrap_label",
+    "CONDITION_COLOURS",
+    "PLOT_KINDS",
     "PAPER_MARK",
+    "PAPER_RUN3_MARK",
     "REFERENCE_MARK",
     "OPTIMAL_LINE",
+    "MARK_WORDS",
 ]
 
+#: one colour per condition, in every figure of the study (Set2 for the paper's
+#: Experiment 2 conditions, in the paper's order; then the other conditions)
+CONDITION_COLOURS = {
+    "NF": "#66c2a5",
+    "RF": "#fc8d62",
+    "BF": "#8da0cb",
+    "SF": "#e78ac3",
+    "AF": "#a6d854",
+    "HF": "#ffd92f",
+    "VF": "#e5c494",
+    "VR": "#b3b3b3",
+    "VA": "#1b9e77",
+}
+
+#: what each experiment's η panel is: box plots (Experiment 1) or bars (Experiment 2)
+PLOT_KINDS = {1: "box", 2: "bar"}
+
 PAPER_MARK = {"marker": "D", "color": "#d62728", "s": 40, "zorder": 5}
+#: Experiment 2: the paper's third-run η
+PAPER_RUN3_MARK = {**PAPER_MARK, "marker": "x"}
 BOX = {"patch_artist": True, "widths": 0.55, "medianprops": {"color": "#d62728", "lw": 2}}
 
 
@@ -56,6 +91,55 @@ REFERENCE_MARK = {"marker": "^", "color": "#636363", "s": 40, "zorder": 5}
 #: how the optimal teacher's numbers are drawn (a line across the conditions)
 OPTIMAL_LINE = {"color": "#2ca02c", "linestyle": "--", "linewidth": 1.5, "zorder": 4}
 
+#: the words for the marks (marker, colour), as a caption names them
+MARK_WORDS = {"D": "diamonds", "x": "crosses", "^": "triangles"}
+COLOUR_WORDS = {"#d62728": "red", "#636363": "grey"}
+
+
+def _mark_words(mark: dict) -> str:
+    return f"{COLOUR_WORDS[mark['color']]} {MARK_WORDS[mark['marker']]}"
+
+
+def eta_caption(experiment: int, who: str = "simulated teachers", reference=None) -> str:
+    """The η panel of :func:`experiment1_figure` or :func:`experiment2_figure` in words.
+
+    Built from the panel's own kind (:data:`PLOT_KINDS`) and marks (:data:`PAPER_MARK`,
+    :data:`PAPER_RUN3_MARK`, :data:`REFERENCE_MARK`); the reference's mark is named only
+    when ``reference`` (the same frame the figure is given) has runs, as it is drawn only
+    then. E.g. ``eta_caption(2, "trainees")``: "bars: the trainees' mean η in each run
+    and, darkest, over the runs; red diamonds: the paper's mean; red crosses: the
+    paper's run 3".
+    """
+    if PLOT_KINDS[experiment] == "box":
+        parts = [
+            f"boxes: η of every run of the {who}, a dot each",
+            f"{_mark_words(PAPER_MARK)}: the paper's median",
+        ]
+        statistic = "median"
+    else:
+        whose = f"{who}'" if who.endswith("s") else f"{who}'s"
+        parts = [
+            f"bars: the {whose} mean η in each run and, darkest, over the runs",
+            f"{_mark_words(PAPER_MARK)}: the paper's mean",
+            f"{_mark_words(PAPER_RUN3_MARK)}: the paper's run 3",
+        ]
+        statistic = "mean"
+    if reference is not None and len(reference):
+        n = reference.teacher.nunique()
+        parts.append(
+            f"{_mark_words(REFERENCE_MARK)}: the {statistic} of a simulated class of the same "
+            f"size, {n} simulated teachers"
+        )
+    return "; ".join(parts)
+
+
+def wrap_label(text: str, width: int) -> str:
+    """``text`` on lines of at most ``width`` characters, broken between words only (a
+    word longer than ``width`` keeps its own line whole)."""
+    return "\n".join(
+        textwrap.wrap(text, width, break_long_words=False, break_on_hyphens=False)
+    )
+
 
 def _optimal_eta(ax, optimal, scale: float = 1.0) -> None:
     """The optimal teacher's eta as a dashed line on an eta axis (nothing without one)."""
@@ -63,7 +147,7 @@ def _optimal_eta(ax, optimal, scale: float = 1.0) -> None:
         return
     ax.axhline(
         scale * optimal.best_eta,
-        label=f"optimal teacher: η = {optimal.best_eta:.0%} ({optimal.n_demos} demos)",
+        label=f"optimal teacher: η = {percent(optimal.best_eta)} ({optimal.n_demos} demos)",
         **OPTIMAL_LINE,
     )
 
@@ -115,6 +199,7 @@ def experiment1_figure(
         )
     _optimal_eta(ax, optimal)
     ax.set_ylabel("teaching efficiency η (at 90 % coverage)")
+    ax.yaxis.set_major_formatter(PercentFormatter(1.0))
     ax.set_title(f"η per condition ({runs.teacher.nunique()} {who})")
     _legend_below(ax)
     _boxes(axes[1], runs, "n_demos", conds, "#c7e9c0")
@@ -124,6 +209,7 @@ def experiment1_figure(
     _boxes(axes[2], runs, "efficacy", conds, "#fdd0a2")
     axes[2].set_ylabel("efficacy ε after the last demo")
     axes[2].set_ylim(-0.03, 1.05)
+    axes[2].yaxis.set_major_formatter(PercentFormatter(1.0))
     axes[2].set_title("(b) efficacy per condition")
     return fig
 
@@ -170,7 +256,7 @@ def experiment2_figure(
         x + (n_runs / 2 - 1) * width,
         [p3[c] for c in conds],
         label="paper: run 3",
-        **{**PAPER_MARK, "marker": "x"},
+        **PAPER_RUN3_MARK,
     )
     if reference is not None and len(reference):
         ref = reference.groupby("condition", observed=True)["eta"].mean()
@@ -183,6 +269,7 @@ def experiment2_figure(
     _optimal_eta(ax, optimal)
     ax.set_xticks(x, conds)
     ax.set_ylabel("mean teaching efficiency η")
+    ax.yaxis.set_major_formatter(PercentFormatter(1.0))
     ax.set_title(f"η̄ per run and overall ({runs.teacher.nunique()} {who})")
     _legend_below(ax, 4)
     ax = axes[1]
@@ -195,13 +282,12 @@ def experiment2_figure(
     share_paper = share_paper / share_paper.sum(axis=0)
     xk = np.arange(len(kinds))
     w = 0.8 / len(conds)
-    colours = plt.cm.Set2(np.arange(len(conds)))
     for i, c in enumerate(conds):
         ax.bar(
             xk + (i - (len(conds) - 1) / 2) * w,
             share_sim.loc[c, kinds].fillna(0),
             w,
-            color=colours[i],
+            color=CONDITION_COLOURS.get(c, "#999999"),
             label=c,
         )
         ax.scatter(
@@ -213,8 +299,10 @@ def experiment2_figure(
             linewidths=2,
             zorder=5,
         )
-    ax.set_xticks(xk, ["demonstration\nerrors", "undemonstrated\nstates", "ambiguous\ndemos"])
+    names = ["demonstration errors", "undemonstrated states", "ambiguous demos"]
+    ax.set_xticks(xk, [wrap_label(name, 14) for name in names])
     ax.set_ylabel("share of all failures of that kind")
+    ax.yaxis.set_major_formatter(PercentFormatter(1.0))
     ax.set_title(f"Failures by condition (bars: {who}, black: paper)")
     _legend_below(ax, len(conds), drop=0.16)  # two-line tick labels
     return fig

@@ -11,9 +11,11 @@ import pandas as pd
 
 from .. import paper
 from ..errors import InvalidFileError, InvalidParameterError, SaveError
+from ..framework.wording import percent
 from ..resources import asset
 from . import replication, stats
 from .cohort import EXPERIMENTS, CohortResult, StudySettings, run_experiment
+from .tables import readable_table
 
 __all__ = [
     "check_out_dir",
@@ -107,8 +109,9 @@ def replication_table(runs: pd.DataFrame, n_boot: int = 2000, seed: int = 0) -> 
 
 
 def pct(x) -> str:
-    """A share as a percentage with one decimal ("n/a" when there is none)."""
-    return "n/a" if x is None or not np.isfinite(x) else f"{100 * x:.1f} %"
+    """A share as a percentage with one decimal, as every η is written
+    (:func:`tutor.framework.wording.percent`; "n/a" when there is none)."""
+    return "n/a" if x is None or not np.isfinite(x) else percent(x)
 
 
 def test_lines(st: dict, experiment: int, lead: str = "") -> list[str]:
@@ -168,7 +171,7 @@ def format_report(result: CohortResult, analysis: dict) -> str:
     exp, st = result.experiment, analysis["stats"]
     n = result.runs.teacher.nunique()
     lines = [f"Experiment {exp}: {n} simulated teachers, seed {result.seed}", ""]
-    lines.append(analysis["summary"].to_string(float_format=lambda v: f"{v:.3f}"))
+    lines.append(readable_table(analysis["summary"]).to_string())
     lines.append("")
     lines += test_lines(st, exp)
     if exp == 1:

@@ -27,6 +27,7 @@ __all__ = [
     "conclusions",
     "experiment2_ranking",
     "summary_table",
+    "describe",
 ]
 
 ALPHA = 0.05
@@ -113,16 +114,34 @@ def experiment1_stats(runs: pd.DataFrame) -> dict:
         "p_used": p if sph_ok else p_gg,
     }
     pairs = _pairwise(data, dv="eta", within="condition", subject="teacher")
+    return {"anova": anova, "pairwise": pairs, **describe(runs, 1)}
+
+
+def describe(runs: pd.DataFrame, experiment: int) -> dict:
+    """The per-condition numbers of a cohort, which need no test (any size, one run too).
+
+    Experiment 1: ``medians``, ``means`` (of eta), ``demos`` (mean demos),
+    ``efficacy_mean``, ``efficacy_sd``, ``reached_target`` (runs that reached 90 %).
+    Experiment 2: ``means`` (of eta), ``by_run`` (mean eta per condition and run),
+    ``demos``, ``efficacy_mean``, ``seconds`` (mean clock seconds).
+    """
+    data = _clean(runs)
     grouped = data.groupby("condition", sort=False)
+    if experiment == 1:
+        return {
+            "medians": grouped["eta"].median().to_dict(),
+            "means": grouped["eta"].mean().to_dict(),
+            "demos": grouped["n_demos"].mean().to_dict(),
+            "efficacy_mean": grouped["efficacy"].mean().to_dict(),
+            "efficacy_sd": grouped["efficacy"].std().to_dict(),
+            "reached_target": grouped["reached_target"].sum().astype(int).to_dict(),
+        }
     return {
-        "anova": anova,
-        "pairwise": pairs,
-        "medians": grouped["eta"].median().to_dict(),
         "means": grouped["eta"].mean().to_dict(),
+        "by_run": data.pivot_table(index="condition", columns="run", values="eta", aggfunc="mean"),
         "demos": grouped["n_demos"].mean().to_dict(),
         "efficacy_mean": grouped["efficacy"].mean().to_dict(),
-        "efficacy_sd": grouped["efficacy"].std().to_dict(),
-        "reached_target": grouped["reached_target"].sum().astype(int).to_dict(),
+        "seconds": grouped["seconds"].mean().to_dict() if "seconds" in data else {},
     }
 
 
@@ -153,19 +172,7 @@ def experiment2_stats(runs: pd.DataFrame) -> dict:
     table["sphericity_p"] = sph_p
     per_teacher = data.groupby(["teacher", "condition"], as_index=False)["eta"].mean()
     pairs = _pairwise(per_teacher, dv="eta", between="condition", parametric=True)
-    means = data.groupby("condition", sort=False)["eta"].mean().to_dict()
-    by_run = data.pivot_table(index="condition", columns="run", values="eta", aggfunc="mean")
-    return {
-        "anova": table,
-        "pairwise": pairs,
-        "means": means,
-        "by_run": by_run,
-        "demos": data.groupby("condition", sort=False)["n_demos"].mean().to_dict(),
-        "efficacy_mean": data.groupby("condition", sort=False)["efficacy"].mean().to_dict(),
-        "seconds": data.groupby("condition", sort=False)["seconds"].mean().to_dict()
-        if "seconds" in data
-        else {},
-    }
+    return {"anova": table, "pairwise": pairs, **describe(runs, 2)}
 
 
 def failure_table(runs: pd.DataFrame) -> pd.DataFrame:
@@ -256,9 +263,14 @@ def experiment2_ranking(conditions, errors, undemonstrated, ambiguous, eta) -> d
 
 
 def summary_table(runs: pd.DataFrame, experiment: int, stats: dict | None = None) -> pd.DataFrame:
-    """Per condition: the simulation's eta (median or mean) beside the paper's, demos, eps."""
+    """Per condition: the simulation's eta (median or mean) beside the paper's, demos, eps.
+
+    ``stats`` (:func:`experiment1_stats` or ``2``) gives the numbers; without it they are
+    :func:`describe`'s (the same numbers, no test needed, so a cohort of any size has
+    its table).
+    """
     if experiment == 1:
-        st = experiment1_stats(runs) if stats is None else stats
+        st = describe(runs, 1) if stats is None else stats
         conds = list(st["medians"])
         return pd.DataFrame(
             {
@@ -271,7 +283,7 @@ def summary_table(runs: pd.DataFrame, experiment: int, stats: dict | None = None
             },
             index=conds,
         )
-    st = experiment2_stats(runs) if stats is None else stats
+    st = describe(runs, 2) if stats is None else stats
     conds = list(st["means"])
     third = st["by_run"][st["by_run"].columns.max()]
     return pd.DataFrame(

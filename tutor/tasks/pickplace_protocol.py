@@ -96,7 +96,6 @@ class PickPlaceRun(TeachingRun):
     experiment = 2
     conditions = ALL_CONDITIONS
     adaptive = ADAPTIVE
-    score_rule = "final"
 
     def __init__(self, condition=None, task: PickPlaceTask | None = None, record=None, **new):
         task = PickPlaceTask() if task is None else task

@@ -22,6 +22,7 @@ import ipywidgets as w
 import numpy as np
 
 from ..errors import TutorError
+from ..framework.wording import percent
 from ..paper import PAPER_MEDIAN_ETA
 from ..runtime import headless
 from ..tasks.maze import MazeTask
@@ -232,7 +233,7 @@ def compare_runs(tutors) -> str:
         if t.session.n_demos == 0:
             rows.append(f"{t.condition}: no demonstrations yet")
             continue
-        score = t.session.score()
+        score = t.run.score()  # the run's own experiment's rule, as after Finish
         eta[t.condition] = score.efficiency
         reach = (
             f"90 % after {score.n_demos} demos"
@@ -240,8 +241,8 @@ def compare_runs(tutors) -> str:
             else f"90 % not reached ({score.efficacy:.0%} after {score.n_demos} demos)"
         )
         rows.append(
-            f"{t.condition}: eta = {score.efficiency:.1%} ({reach}); "
-            f"paper's median {PAPER_MEDIAN_ETA[paper_condition(t.condition)]:.1%}"
+            f"{t.condition}: η = {percent(score.efficiency)} ({reach}); "
+            f"paper's median {percent(PAPER_MEDIAN_ETA[paper_condition(t.condition)])}"
         )
     text = "\n".join(rows)
     if eta:
@@ -275,7 +276,7 @@ def plot_runs(tutors, ax=None):
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 3.5))
     names = [t.condition for t in tutors]
-    mine = [100 * t.session.score().efficiency if t.session.n_demos else 0.0 for t in tutors]
+    mine = [100 * t.run.score().efficiency if t.session.n_demos else 0.0 for t in tutors]
     x = np.arange(len(names))
     ax.bar(x, mine, width=0.55, color="#1f4e9c", label="you")
     ax.scatter(

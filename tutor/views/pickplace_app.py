@@ -24,6 +24,7 @@ import ipywidgets as w
 import numpy as np
 
 from ..errors import InvalidFileError, TutorError
+from ..framework.wording import percent, plural
 from ..paper import PAPER_MEAN_ETA, PAPER_THIRD_RUN_ETA
 from ..runtime import headless
 from ..tasks.pickplace import PickPlaceTask
@@ -468,19 +469,23 @@ def paper_condition(condition: str) -> str:
 
 
 def compare_runs(tutors) -> str:
-    """The trainee's eta over their runs beside the paper's means for the condition."""
+    """The trainee's η over their runs beside the paper's means for the condition.
+
+    Each run's η is its own score (:meth:`tutor.framework.run.TeachingRun.score`, the
+    paper's Experiment 2 rule: ε after the last demo / the demos given), the number the
+    after-Finish summary shows.
+    """
     lines, etas = [], []
     for i, t in enumerate(tutors, start=1):
-        s = t.run.session
-        if s.n_demos == 0:
+        if t.run.n_demos == 0:
             lines.append(f"Run {i}: no demonstrations yet")
             continue
-        score = s.score()
+        score = t.run.score()
         etas.append(score.efficiency)
-        reached = "reached 90 %" if score.reached else f"reached {score.efficacy:.0%}"
         lines.append(
-            f"Run {i} ({t.run.condition}): eta = {score.efficiency:.1%} ({reached} with "
-            f"{score.n_demos} demos; {t.run.clock_text()})"
+            f"Run {i} ({t.run.condition}): η = {percent(score.efficiency)} (the robot "
+            f"succeeds at {score.efficacy:.0%} of the plants after "
+            f"{plural(score.n_demos, 'demo')}; {t.run.clock_text()})"
         )
     if not etas:
         return "\n".join(lines)
@@ -489,8 +494,9 @@ def compare_runs(tutors) -> str:
     why = BEYOND_THE_PAPER.get(own, (cond, "costs the same"))[1]
     beyond = "" if cond == own else f" ({own} is beyond the paper; {cond} {why})"
     lines.append(
-        f"\nYour mean eta: {np.mean(etas):.1%}. The paper's 9 trainees in {cond}{beyond}: mean "
-        f"{PAPER_MEAN_ETA[cond]:.1%} over the runs, {PAPER_THIRD_RUN_ETA[cond]:.1%} in the third."
+        f"\nYour mean η: {percent(np.mean(etas))}. The paper's 9 trainees in {cond}{beyond}: "
+        f"mean {percent(PAPER_MEAN_ETA[cond])} over the runs, "
+        f"{percent(PAPER_THIRD_RUN_ETA[cond])} in the third."
     )
     best = optimal_sentence(tutors[0].task)
     if best:

@@ -28,6 +28,7 @@ from matplotlib.ticker import MaxNLocator, PercentFormatter
 from scipy.ndimage import distance_transform_edt
 
 from ..framework import AMBIGUOUS, INCORRECT
+from ..framework.wording import percent
 from .style import AMBIGUOUS as AMBIGUOUS_COLOUR
 from .style import DEMO, FAIL, PASS, new_axes
 from .style import INCORRECT as INCORRECT_COLOUR
@@ -116,14 +117,15 @@ def plot_progress(session, ax=None, target=0.9):
                 zorder=4,
             )
     if len(history):
-        score = session.score(target)
+        score = session.score(rule="target", target=target)  # where target is first reached
         if score.reached:
             left = score.n_demos <= (len(history) + 1) / 2
             ax.axvline(score.n_demos, color="0.6", linestyle=":", linewidth=1.0, zorder=0)
             ax.text(
                 score.n_demos,
                 1.0,
-                f"{target:.0%} first reached at demo {score.n_demos} (η = {score.efficiency:.1%})",
+                f"{target:.0%} first reached at demo {score.n_demos} "
+                f"(η = {percent(score.efficiency)})",
                 transform=ax.get_xaxis_transform(),
                 ha="left" if left else "right",
                 va="bottom",

@@ -25,7 +25,7 @@ import re
 import numpy as np
 
 from ..framework import AMBIGUOUS, INCORRECT, UNDEMONSTRATED
-from ..framework.wording import change_points, efficacy_change, plural
+from ..framework.wording import change_points, efficacy_change, percent, plural
 from ..tasks.optimal_reference import optimal_reference
 
 __all__ = [
@@ -259,9 +259,9 @@ def finish_summary(run, paper: float, statistic: str, condition: str | None = No
             f"succeeds at {s.efficacy:.0%} of the {run.task.condition_noun_plural}"
         )
     text = (
-        f"{how[0].upper()}{how[1:]}: your teaching efficiency is η = {s.efficiency:.1%} "
+        f"{how[0].upper()}{how[1:]}: your teaching efficiency is η = {percent(s.efficiency)} "
         f"(efficacy divided by the number of demonstrations). The paper's {statistic} for "
-        f"{condition or run.condition} was {paper:.1%}.{beyond}"
+        f"{condition or run.condition} was {percent(paper)}.{beyond}"
     )
     best = optimal_sentence(run.task, s.n_demos)
     return f"{text} {best}" if best else text
@@ -292,7 +292,7 @@ def optimal_sentence(task, n_demos: int | None = None) -> str:
         head = f"you used {plural(n_demos, 'demonstration', 'demonstrations')}; {head}"
     return (
         f"{head[0].upper()}{head[1:]}, so the best possible η by this experiment's score is "
-        f"{ref.best_eta:.1%}."
+        f"{percent(ref.best_eta)}."
     )
 
 
@@ -365,10 +365,11 @@ def incorrect_mark(record) -> str:
 
 
 def session_report(session, target: float = TARGET) -> str:
-    """The paper's Experiment 1 score of a session, in words (for the framework's notebook)."""
+    """The paper's Experiment 1 score of a maze session, in words (for the framework's
+    notebook, whose sessions are Experiment 1's maze)."""
     if not session.history:
         return "No demonstrations yet."
-    s = session.score(target)
+    s = session.score(rule="target", target=target)
     if s.reached:
         head = (
             f"{target:.0%} coverage reached after {s.n_demos} demo{'s' if s.n_demos > 1 else ''}"
@@ -379,4 +380,4 @@ def session_report(session, target: float = TARGET) -> str:
             f"{target:.0%} coverage not reached; after all {s.n_demos} demos "
             f"efficacy is {s.efficacy:.0%}"
         )
-    return f"{head}: efficiency η = {s.efficiency:.1%}."
+    return f"{head}: efficiency η = {percent(s.efficiency)}."
