@@ -43,6 +43,7 @@ import ipywidgets as w
 from ..errors import InvalidParameterError, TutorError
 from ..framework.wording import plural
 from ..runtime import headless, sessions_root
+from ..views.payloads import check_choice, check_text, safely
 from .class_report import analyse_class, as_sentence, class_figure, save_class
 from .classroom import read_class
 
@@ -166,12 +167,13 @@ class ClassDashboard:
         self.trainees.add_class("lfd-class-trainees")
         self.problems = w.HTML()
         self.problems.add_class("lfd-class-problems")
-        self.refresh_button.on_click(lambda _: self.refresh())
-        self.experiment.observe(lambda _: self.refresh(), "value")
-        self.folder.observe(lambda _: self._folder_changed(), "value")
-        self.auto.observe(lambda change: self._auto(change["new"]), "value")
-        self.save_button.on_click(lambda _: self.save())
-        self.rehearse_button.on_click(lambda _: self.rehearse())
+        # every click and change from the page goes through safely(): nothing raises out
+        self.refresh_button.on_click(lambda _: self._safely(self.refresh))
+        self.experiment.observe(lambda _: self._safely(self.refresh), "value")
+        self.folder.observe(lambda _: self._safely(self._folder_changed), "value")
+        self.auto.observe(lambda _: self._safely(lambda: self._auto(self.auto.value)), "value")
+        self.save_button.on_click(lambda _: self._safely(self.save))
+        self.rehearse_button.on_click(lambda _: self._safely(self.rehearse))
         self.widget = w.VBox(
             [
                 self.folder,
@@ -213,12 +215,26 @@ class ClassDashboard:
             f'<p role="status" aria-live="polite" style="color:{colour}">{text}</p>'
         )
 
+    def _safely(self, action) -> None:
+        safely(action, lambda text: self._say(html.escape(text), problem=True))
+
+    def class_folder(self) -> Path:
+        """The folder in the folder field (``.`` when it is blank).
+
+        Raises
+        ------
+        InvalidPayloadError
+            The field's value, as the page sent it, is not text or is far too long.
+        """
+        return Path(check_text(self.folder.value, "the class folder").strip() or ".")
+
     def refresh(self) -> None:
         """Read the class folder again and redraw everything (errors are said in words)."""
-        folder = Path(self.folder.value.strip() or ".")
         started = time.perf_counter()
         try:
-            self.result = read_class(folder, self.experiment.value, cache=self._cache)
+            folder = self.class_folder()
+            experiment = check_choice(self.experiment.value, "the experiment", (1, 2))
+            self.result = read_class(folder, experiment, cache=self._cache)
             self.analysis = analyse_class(self.result)
         except TutorError as exc:
             self.result = self.analysis = None
@@ -372,7 +388,7 @@ class ClassDashboard:
 
     def results_folder(self) -> Path:
         """Where Save writes: ``<class folder>_results`` beside the class folder."""
-        folder = Path(self.folder.value.strip() or ".").resolve()
+        folder = self.class_folder().resolve()
         return folder.parent / f"{folder.name}_results"
 
     def save(self) -> None:
@@ -380,8 +396,8 @@ class ClassDashboard:
         if self.result is None:
             self._say("There is nothing to save: the class could not be read.", problem=True)
             return
-        out = self.results_folder()
         try:
+            out = self.results_folder()
             paths = save_class(self.result, self.analysis, out)
         except TutorError as exc:
             self._say(html.escape(str(exc)), problem=True)

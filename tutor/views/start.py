@@ -72,6 +72,7 @@ from ..runtime import (
 from ..tasks.maze_run import PHASE_ORDER
 from ..tasks.pickplace_protocol import ALL_CONDITIONS, EXTRA_CONDITIONS, RUNS
 from ..tasks.pickplace_protocol import CONDITIONS as PICKPLACE_CONDITIONS
+from .payloads import check_choice, check_text, safely
 from .worked_example import instruction_widget
 
 __all__ = [
@@ -193,7 +194,7 @@ class StartForm:
         self.practice.add_class("lfd-start-practice")
         self.go = w.Button(description="Start", button_style="primary", icon="play")
         self.go.add_class("lfd-start-go")
-        self.go.on_click(lambda _: self.start())
+        self.go.on_click(lambda _: self._safely(self.start))
         self.note = w.HTML()
         self.note.add_class("lfd-start-note")
         self.results_box = w.Output()
@@ -204,7 +205,7 @@ class StartForm:
         )
         self._extra_fields = self._condition_fields()
         self._show_notes()
-        self.name.observe(lambda _: self._name_changed(), names="value")
+        self.name.observe(lambda _: self._safely(self._name_changed), names="value")
         form = w.VBox(
             [
                 w.HTML(f"<b>{html.escape(self.title)}</b>"),
@@ -241,8 +242,14 @@ class StartForm:
         """The trainee typed in the name field (before Start: Experiment 2's plan follows)."""
 
     def typed_name(self) -> str:
-        """The name the form would start with: the one typed, else the default one."""
-        typed = self.name.value
+        """The name the form would start with: the one typed, else the default one.
+
+        Raises
+        ------
+        InvalidPayloadError
+            The field's value, as the page sent it, is not text or is far too long.
+        """
+        typed = check_text(self.name.value, "your name")
         return typed if typed.strip() else default_trainee()
 
     @property
@@ -254,6 +261,11 @@ class StartForm:
         for field in (self.name, self.practice, self.go, *self._extra_fields):
             if field.has_trait("disabled"):  # (a note has nothing to lock)
                 field.disabled = True
+
+    def _safely(self, action) -> None:
+        """Run what a click or a keystroke asked for; an error is said in the form's note,
+        never raised out of the widget's callback."""
+        safely(action, lambda text: self._say(text, problem=True))
 
     def _say(self, text: str, problem: bool = False) -> None:
         self.problem = text if problem else None
@@ -322,7 +334,7 @@ class StartForm:
             tutor = self.make_tutor(step, path)
             self.tutors.append(tutor)
             for button in tutor.buttons.values():
-                button.on_click(lambda _: self._after_click())
+                button.on_click(lambda _: self._safely(self._after_click))
             header = w.HTML(f"<h3>{html.escape(step['label'])}</h3>")
             intro = instruction_widget(self.experiment, step["condition"], self.practice_run)
             self.stage.children = (*self.stage.children, header, intro, tutor.widget)
@@ -524,6 +536,7 @@ class PickPlaceExperiment(StartForm):
     def check_ready(self, name: str) -> None:
         if self._condition_problem is not None:
             raise InvalidParameterError(self._condition_problem)
+        check_choice(self.condition, "the condition", tuple(self.condition_buttons.options))
         if self.class_plan is None:
             return
         self.assignment = self.class_plan.assign(name)
