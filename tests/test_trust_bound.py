@@ -3,6 +3,7 @@ blank names and the command line's counts."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -165,3 +166,124 @@ def test_a_bad_message_from_the_3d_view_is_said_in_its_caption_and_sends_nothing
     assert sent == [] and "reload the page" in scene._caption.value
     scene._on_view_msg(view, {"type": "hello", "id": "v1"}, [])
     assert sent == [{"type": "full", "to": "v1"}]
+
+
+# --------------------------------------------------------------------------- 2. UTF-8 edge
+
+
+def test_safe_text_replaces_lone_surrogates_and_reads_escaped_bytes():
+    from tutor.runtime import safe_text
+
+    assert safe_text("Mai Anh") == "Mai Anh"
+    assert safe_text("a\udcff") == "a\ufffd"
+    assert safe_text("\ud800x\udfff") == "\ufffdx\ufffd"
+    assert safe_text("\ud83d\ude00") == "\U0001f600"  # a pair is its character
+    assert safe_text("Zo\udceb", from_bytes=True) == "Zoë"  # Latin-1 bytes
+    assert safe_text("Zo\udcc3\udcab", from_bytes=True) == "Zoë"  # UTF-8 bytes
+    assert safe_text("\udc80", from_bytes=True) == "€"  # Windows-1252, not a control
+    assert safe_text("a\ud800", from_bytes=True) == "a\ufffd"  # not an escaped byte
+    for text in ("a\udcff", "Zo\udceb", "\ud800\udc00\udfff"):
+        safe_text(text).encode("utf-8")
+        safe_text(text, from_bytes=True).encode("utf-8")
+
+
+def _strict_print(*texts) -> bytes:
+    import io
+
+    out = io.TextIOWrapper(io.BytesIO(), encoding="utf-8", errors="strict")
+    print(*texts, file=out)
+    out.flush()
+    return out.buffer.getvalue()
+
+
+def test_a_name_with_a_lone_surrogate_typed_in_the_form_starts_saves_and_prints(person):
+    from tutor.views.start import MazeExperiment
+
+    form = MazeExperiment(start=False)
+    form.name.value = "a\udcff"  # as the page's JSON "a\\udcff" arrives
+    form.go.click()
+    assert form.trainee == "a\ufffd" and form.problem is None
+    tutor = form.current
+    tutor.pad.draw(GOOD)
+    assert tutor.session_file.is_file() and not tutor.unsaved
+    assert json.loads(tutor.session_file.read_text())["trainee"]["name"] == "a\ufffd"
+    assert "a\ufffd".encode() in _strict_print(form.note.value, tutor.status.value)
+
+
+def test_tutor_trainee_in_latin1_bytes_is_read_as_latin1(person):
+    import os
+
+    from tutor.framework import Trainee
+    from tutor.views.start import MazeExperiment
+
+    os.environb[b"TUTOR_TRAINEE"] = b"Zo\xeb"
+    try:
+        assert Trainee.from_name().name == "Zoë"
+        form = MazeExperiment(start=True)
+        assert form.name.value == "Zoë" and form.name.disabled and form.trainee == "Zoë"
+    finally:
+        del os.environb[b"TUTOR_TRAINEE"]
+
+
+def _run_file_named(folder, name: str):
+    """A finished VF run of 3 demos whose file names the trainee ``name`` (as JSON writes
+    a lone surrogate: an escape)."""
+    from tutor.framework import Trainee
+    from tutor.tasks.maze import MazeTask
+    from tutor.tasks.maze_run import MazeRun
+
+    run = MazeRun.new("VF", MazeTask(), trainee=Trainee.from_name("Mai"))
+    for demo in bundled_demos("maze_good")[:3]:
+        run.add_demo(demo)
+    run.finish()
+    doc = run.to_dict()
+    doc["trainee"]["name"] = name
+    path = folder / doc["trainee"]["key"] / "VF.json"
+    path.parent.mkdir(parents=True)
+    path.write_text(json.dumps(doc), encoding="utf-8")  # ensure_ascii: "\\udcff"
+    return path
+
+
+def test_a_run_file_naming_a_lone_surrogate_loads_saves_and_prints(tmp_path):
+    from tutor.tasks.maze import MazeTask
+    from tutor.tasks.maze_run import MazeRun
+
+    path = _run_file_named(tmp_path, "a\udcff")
+    assert "\\udcff" in path.read_text()
+    run = MazeRun.load(path, MazeTask())
+    assert run.record.trainee.name == "a\ufffd"
+    run.save(tmp_path / "again.json")
+    assert json.loads((tmp_path / "again.json").read_text())["trainee"]["name"] == "a\ufffd"
+    assert "a\ufffd".encode() in _strict_print(run.record.trainee.name, run.record.label)
+
+
+def test_the_class_command_prints_a_run_naming_a_lone_surrogate(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    _run_file_named(tmp_path / "class", "a\udcff")
+    env = {**os.environ, "PYTHONIOENCODING": "utf-8:strict"}
+    out = subprocess.run(
+        [sys.executable, "-m", "tutor", "class", str(tmp_path / "class"), "--experiment", "1",
+         "--workers", "1", "--out", str(tmp_path / "out")],
+        capture_output=True, env=env, timeout=300,
+    )
+    assert out.returncode == 0, out.stderr.decode("utf-8", "replace")
+    assert "a\ufffd".encode() in out.stdout and b"Traceback" not in out.stderr
+    written = b"".join(p.read_bytes() for p in (tmp_path / "out").glob("*.csv"))
+    assert "a\ufffd".encode() in written
+
+
+def test_a_class_plan_naming_a_lone_surrogate_assigns_it(tmp_path):
+    from tutor.framework.assignment import load_plan
+
+    plan_file = tmp_path / "plan.json"
+    plan_file.write_text(json.dumps({
+        "format": "lfd-tutor-class-plan", "version": 1, "experiment": 2,
+        "assign": {"a\udcff": "RF"}, "trainees": ["Zo\udceb", "Ana"],
+    }))
+    plan = load_plan(plan_file, ("NF", "RF", "BF", "SF"))
+    got = plan.assign("a\udcff")
+    assert got.condition == "RF" and got.trainee == "a\ufffd"
+    assert "a\ufffd".encode() in _strict_print(got.reason, got.trainee, plan.counts)

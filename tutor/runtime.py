@@ -37,6 +37,8 @@ __all__ = [
     "trainee_key",
     "normalise_name",
     "default_trainee",
+    "safe_text",
+    "env_text",
 ]
 
 #: embedding and override controls: they reorder text on screen, so they are refused
@@ -46,17 +48,60 @@ _READABLE = 40
 _HASH_CHARS = 10
 
 
+#: lone surrogates: code points UTF-8 cannot write
+_SURROGATE = re.compile("[\ud800-\udfff]")
+#: how Python's "surrogateescape" keeps the bytes it could not decode (0x80-0xFF)
+_ESCAPED = re.compile("[\udc80-\udcff]+")
+
+
+def _unescape(match: re.Match) -> str:
+    """Bytes kept by "surrogateescape", decoded: as UTF-8 if they are that, else as Latin-1
+    (its Windows form, cp1252, where 0x80-0x9F are letters and signs, not controls)."""
+    raw = bytes(ord(c) - 0xDC00 for c in match.group())
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return raw.decode("cp1252", "replace")
+
+
+def safe_text(text: str, from_bytes: bool = False) -> str:
+    """``text`` as Unicode that UTF-8 can write and a terminal can print.
+
+    A surrogate pair is joined into its character; any other lone surrogate (U+D800 to
+    U+DFFF, e.g. ``"a\udcff"`` sent by a page, or ``\udcff`` in a JSON file) becomes
+    U+FFFD, the replacement character. With ``from_bytes`` (text Python decoded from the
+    operating system with "surrogateescape": the environment, command-line arguments), a
+    run of U+DC80 to U+DCFF is the bytes UTF-8 could not decode: they are read as UTF-8 if
+    they are that, else as Latin-1, so ``TUTOR_TRAINEE`` set to ``Zo\xeb`` in Latin-1
+    reads "Zoë". Text without surrogates is returned as it is.
+    """
+    if not isinstance(text, str) or not _SURROGATE.search(text):
+        return text
+    text = text.encode("utf-16-le", "surrogatepass").decode("utf-16-le", "surrogatepass")
+    if from_bytes:
+        text = _ESCAPED.sub(_unescape, text)
+    return _SURROGATE.sub("\ufffd", text)
+
+
+def env_text(var: str) -> str:
+    """The environment variable ``var`` as safe text (:func:`safe_text` of its bytes),
+    without surrounding spaces; "" when it is unset."""
+    return safe_text(os.environ.get(var, ""), from_bytes=True).strip()
+
+
 def headless() -> bool:
     """True when TUTOR_HEADLESS is set to a true value (1, true, yes)."""
     return os.environ.get("TUTOR_HEADLESS", "").strip().lower() in ("1", "true", "yes")
 
 
 def normalise_name(name) -> str:
-    """The trainee's name as stored: NFC, trimmed, single spaces (refuses empty names)."""
+    """The trainee's name as stored: NFC, trimmed, single spaces, lone surrogates replaced
+    (:func:`safe_text`); refuses empty names."""
     if not isinstance(name, str):
         raise InvalidParameterError(
             f"the trainee's name must be text, e.g. trainee = \"Mai Anh\"; got {name!r}"
         )
+    name = safe_text(name)
     if any(c in _DIRECTION_CONTROLS for c in name):
         raise InvalidParameterError(
             "the trainee's name holds invisible direction controls (U+202A-U+202E, "
@@ -95,7 +140,7 @@ def default_trainee() -> str:
     "trainee".
     """
     for var in ("TUTOR_TRAINEE", "JUPYTERHUB_USER"):
-        user = os.environ.get(var, "").strip()
+        user = env_text(var)
         if user:
             return user
     return "trainee"

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 
 from ..errors import InvalidFileError, InvalidParameterError
-from ..runtime import default_trainee, normalise_name, trainee_key
+from ..runtime import default_trainee, normalise_name, safe_text, trainee_key
 
 __all__ = [
     "RECORD_FORMAT",
@@ -114,11 +114,13 @@ def _obj(data, path: str, required: tuple[str, ...], optional: tuple[str, ...] =
 
 
 def _str(value, path: str, choices=None) -> str:
+    """Text of a record, made safe to write and print (lone surrogates, as a JSON
+    ``\\udcff`` gives them, become U+FFFD: :func:`tutor.runtime.safe_text`)."""
     if not isinstance(value, str):
         _fail(path, f"must be text, got {type(value).__name__}")
     if choices is not None and value not in choices:
         _fail(path, f"must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
-    return value
+    return safe_text(value)
 
 
 def _bool(value, path: str) -> bool:

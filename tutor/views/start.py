@@ -54,7 +54,6 @@ Stable CSS classes for browser tests: ``lfd-start-form`` (the whole form),
 from __future__ import annotations
 
 import html
-import os
 from pathlib import Path
 
 import ipywidgets as w
@@ -63,6 +62,7 @@ from ..errors import InvalidParameterError, InvalidPlanError, TutorError
 from ..framework.assignment import plan_from_env
 from ..runtime import (
     default_trainee,
+    env_text,
     headless,
     normalise_name,
     session_dir,
@@ -126,7 +126,7 @@ def condition_from_env() -> str | None:
         ``TUTOR_CONDITION`` is set but is not one of NF, RF, BF, SF (or AF or HF, beyond
         the paper).
     """
-    value = os.environ.get("TUTOR_CONDITION", "").strip()
+    value = env_text("TUTOR_CONDITION")
     if not value:
         return None
     if value.upper() not in ALL_CONDITIONS:
@@ -176,7 +176,7 @@ class StartForm:
         self.folder: Path | None = None
         self.practice_run = False
         self.problem: str | None = None
-        fixed_name = os.environ.get("TUTOR_TRAINEE", "").strip()
+        fixed_name = env_text("TUTOR_TRAINEE")
         self.name = w.Text(
             value=fixed_name,
             placeholder=default_trainee(),
