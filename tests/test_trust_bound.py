@@ -287,3 +287,104 @@ def test_a_class_plan_naming_a_lone_surrogate_assigns_it(tmp_path):
     got = plan.assign("a\udcff")
     assert got.condition == "RF" and got.trainee == "a\ufffd"
     assert "a\ufffd".encode() in _strict_print(got.reason, got.trainee, plan.counts)
+
+
+# --------------------------------------------------------------------------- 3. path lengths
+
+LONG_NAME = "n" * 300  # one name over NAME_MAX (255)
+DEEP = "/".join(["d" * 200] * 21)  # every name fits, the whole path is over PATH_MAX
+DEEP_WIDE = "/".join(["é" * 100] * 21)  # the same in bytes, half as many characters
+
+
+def test_check_path_length_refuses_a_long_name_or_path_before_the_file_system_does(tmp_path):
+    from tutor.errors import InvalidFileError, InvalidParameterError
+    from tutor.fileio import check_path_length
+
+    assert check_path_length(tmp_path / "fine", "x") == tmp_path / "fine"
+    with pytest.raises(InvalidParameterError, match="bytes long"):
+        check_path_length(tmp_path / LONG_NAME, "the folder")
+    with pytest.raises(InvalidFileError, match="as a full path"):
+        check_path_length(tmp_path / DEEP, "the folder", InvalidFileError)
+    with pytest.raises(InvalidParameterError, match="room for the 100 bytes"):
+        check_path_length(tmp_path / "/".join(["d" * 200] * 19) / ("e" * 120), "out", room=100)
+    with pytest.raises(OSError) as raw:  # what the check saves everyone from
+        (tmp_path / DEEP).exists()
+    assert raw.value.errno == 36  # ENAMETOOLONG
+
+
+@pytest.mark.parametrize("where", [LONG_NAME, DEEP], ids=["long name", "deep path"])
+def test_tutor_session_dir_too_long_is_a_named_error_and_said_by_the_form(person, tmp_path,
+                                                                         where):
+    from tutor.errors import InvalidParameterError
+    from tutor.runtime import session_dir
+    from tutor.views.start import MazeExperiment
+
+    person.setenv("TUTOR_SESSION_DIR", str(tmp_path / where))
+    with pytest.raises(InvalidParameterError, match="TUTOR_SESSION_DIR"):
+        session_dir("Mai Anh")
+    form = MazeExperiment(start=False)
+    form.name.value = "Mai Anh"
+    form.go.click()
+    assert form.trainee is None and "TUTOR_SESSION_DIR" in form.problem
+
+
+def test_a_run_file_path_too_long_is_a_named_error(tmp_path):
+    from tutor.errors import InvalidParameterError
+    from tutor.views.maze_app import MazeTutor
+
+    for where in (LONG_NAME, DEEP):
+        with pytest.raises(InvalidParameterError, match="session_file"):
+            MazeTutor("VF", session_file=tmp_path / where / "VF.json", trainee="Mai")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["reproduce", "--experiment", "1", "--out", "{out}"],
+        ["robustness", "--experiment", "1", "--seeds", "1", "--out", "{out}"],
+        ["adaptive", "--quick", "--out", "{out}"],
+        ["class", "{tmp}", "--experiment", "1", "--out", "{out}"],
+    ],
+    ids=["reproduce", "robustness", "adaptive", "class"],
+)
+@pytest.mark.parametrize("where", [LONG_NAME, DEEP], ids=["long name", "deep path"])
+def test_out_too_long_is_refused_in_one_line_before_any_work(tmp_path, capsys, argv, where):
+    from tutor.__main__ import main
+
+    out = str(tmp_path / where)
+    code = main([a.format(out=out, tmp=tmp_path) for a in argv])
+    err = capsys.readouterr().err
+    assert code == 2 and "InvalidParameterError" in err and "--out" in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("option", ["sessions", "--plan"])
+def test_a_class_folder_or_plan_too_long_is_refused(tmp_path, capsys, option):
+    from tutor.__main__ import main
+
+    where = str(tmp_path / DEEP)
+    argv = ["class", where if option == "sessions" else str(tmp_path), "--experiment", "1"]
+    if option == "--plan":
+        argv += ["--plan", where]
+    assert main(argv) == 2
+    assert "InvalidFileError" in capsys.readouterr().err
+
+
+def test_the_dashboard_says_a_folder_or_results_folder_is_too_long(tmp_path, person):
+    from tutor.errors import InvalidParameterError
+    from tutor.study.dashboard import ClassDashboard, default_class_folder
+
+    board = ClassDashboard(tmp_path)
+    for where in (LONG_NAME, DEEP_WIDE):
+        board.folder.value = str(tmp_path / where)
+        assert "the class folder" in board.status.value and "bytes long" in board.status.value
+    near = tmp_path / ("c" * 250)  # fits; its "_results" folder beside it would not
+    near.mkdir()
+    board.folder.value = str(near)
+    assert "No run files" in board.status.value
+    board.result = board.analysis = object()  # as if there were something to save
+    board.save_button.click()
+    assert "the results folder" in board.status.value and "bytes long" in board.status.value
+    person.setenv("TUTOR_CLASS_DIR", str(tmp_path / DEEP))
+    with pytest.raises(InvalidParameterError, match="TUTOR_CLASS_DIR"):
+        default_class_folder()

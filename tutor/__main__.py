@@ -160,9 +160,14 @@ def _parser() -> argparse.ArgumentParser:
 
 def class_command(args) -> None:
     """``lfd-tutor class``: read, analyse, print the report and (``--out``) save."""
+    from .errors import InvalidFileError
+    from .fileio import check_path_length
     from .study.classroom import read_class
     from .study.report import check_out_dir
 
+    check_path_length(args.sessions, "the class folder", InvalidFileError)
+    if args.plan is not None:
+        check_path_length(args.plan, "--plan", InvalidFileError)
     if args.out is not None:
         check_out_dir(args.out)
 

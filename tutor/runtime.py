@@ -29,6 +29,7 @@ import unicodedata
 from pathlib import Path
 
 from .errors import InvalidParameterError, SaveError
+from .fileio import check_path_length
 
 __all__ = [
     "headless",
@@ -43,6 +44,8 @@ __all__ = [
 
 #: embedding and override controls: they reorder text on screen, so they are refused
 _DIRECTION_CONTROLS = set("\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+#: bytes kept free below TUTOR_SESSION_DIR: a trainee's folder and the files in it
+SESSION_ROOM = 200
 #: the readable part of a folder key is at most this long
 _READABLE = 40
 _HASH_CHARS = 10
@@ -147,11 +150,19 @@ def default_trainee() -> str:
 
 
 def sessions_root() -> Path:
-    """The folder that holds every trainee's folder (``TUTOR_SESSION_DIR`` or ./sessions)."""
+    """The folder that holds every trainee's folder (``TUTOR_SESSION_DIR`` or ./sessions).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``TUTOR_SESSION_DIR`` holds a NUL character, or it is too long for the file
+        system with room for a trainee's folder and files
+        (:func:`tutor.fileio.check_path_length`).
+    """
     base = os.environ.get("TUTOR_SESSION_DIR", "").strip() or "sessions"
     if "\x00" in base:
         raise InvalidParameterError("TUTOR_SESSION_DIR holds a NUL character: set it to a folder")
-    return Path(base)
+    return check_path_length(base, "TUTOR_SESSION_DIR", room=SESSION_ROOM)
 
 
 def session_dir(trainee=None) -> Path:
@@ -160,7 +171,8 @@ def session_dir(trainee=None) -> Path:
     Raises
     ------
     InvalidParameterError
-        The name is empty, or ``TUTOR_SESSION_DIR`` is a file rather than a folder.
+        The name is empty, or ``TUTOR_SESSION_DIR`` is a file rather than a folder, or
+        too long.
     SaveError
         The folder cannot be made (no permission, a read-only disk).
     """

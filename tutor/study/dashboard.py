@@ -41,11 +41,13 @@ from pathlib import Path
 import ipywidgets as w
 
 from ..errors import InvalidParameterError, TutorError
+from ..fileio import check_path_length
 from ..framework.wording import plural
 from ..runtime import headless, sessions_root
 from ..views.payloads import check_choice, check_text, safely
 from .class_report import analyse_class, as_sentence, class_figure, save_class
 from .classroom import read_class
+from .report import OUT_ROOM
 
 __all__ = ["ClassDashboard", "class_dashboard", "CLASS_DIR_ENV", "default_class_folder"]
 
@@ -58,7 +60,7 @@ REFRESH_RANGE = (10, 600)
 def default_class_folder() -> Path:
     """``TUTOR_CLASS_DIR``, or else the tutor's sessions folder."""
     value = os.environ.get(CLASS_DIR_ENV, "").strip()
-    return Path(value) if value else sessions_root()
+    return check_path_length(value, CLASS_DIR_ENV) if value else sessions_root()
 
 
 def _table(frame, float_format="{:.3f}") -> str:
@@ -225,8 +227,11 @@ class ClassDashboard:
         ------
         InvalidPayloadError
             The field's value, as the page sent it, is not text or is far too long.
+        InvalidParameterError
+            A name in it, or the whole path, is too long for the file system.
         """
-        return Path(check_text(self.folder.value, "the class folder").strip() or ".")
+        text = check_text(self.folder.value, "the class folder").strip() or "."
+        return check_path_length(text, "the class folder")
 
     def refresh(self) -> None:
         """Read the class folder again and redraw everything (errors are said in words)."""
@@ -389,7 +394,9 @@ class ClassDashboard:
     def results_folder(self) -> Path:
         """Where Save writes: ``<class folder>_results`` beside the class folder."""
         folder = self.class_folder().resolve()
-        return folder.parent / f"{folder.name}_results"
+        return check_path_length(
+            folder.parent / f"{folder.name}_results", "the results folder", room=OUT_ROOM
+        )
 
     def save(self) -> None:
         """Write the class's CSV, JSON, report and figure (as ``lfd-tutor class --out``)."""

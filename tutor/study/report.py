@@ -11,6 +11,7 @@ import pandas as pd
 
 from .. import paper
 from ..errors import InvalidFileError, InvalidParameterError, SaveError
+from ..fileio import check_path_length
 from ..resources import asset
 from . import replication, stats
 from .cohort import EXPERIMENTS, CohortResult, StudySettings, run_experiment
@@ -32,6 +33,8 @@ __all__ = [
 #: ``lfd-tutor robustness`` wrote them (seed 0; seeds 0-9): notebook 04 reads them
 #: instead of simulating for a minute
 BUNDLED = asset("cohorts")
+#: bytes kept free below an output folder for the names of the files written in it
+OUT_ROOM = 100
 
 
 def check_out_dir(out) -> Path:
@@ -47,11 +50,14 @@ def check_out_dir(out) -> Path:
 
     Raises
     ------
+    InvalidParameterError
+        ``out`` is not a path, or too long for the file system with room for the files
+        written in it (:func:`tutor.fileio.check_path_length`).
     SaveError
         ``out`` (or a folder on the way to it) is a file, or the folder is read-only or
         otherwise cannot be written.
     """
-    out = Path(out)
+    out = check_path_length(out, "the output folder (--out)", room=OUT_ROOM)
     nearest = out
     while not nearest.exists() and nearest != nearest.parent:
         if nearest.is_symlink():  # a dangling link cannot become a folder

@@ -77,6 +77,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidParameterError, InvalidPayloadError
+from ..fileio import atomic_write_text
 from .meshcat_recorder import SceneRecorder, delete_command, empty_animation, frame_commands
 from .payloads import check_view_message
 from .scene_animation import (
@@ -562,10 +563,15 @@ class Scene3D:
         return page(title, scene_data(chunks), self.legend_html(), caption)
 
     def save_html(self, path) -> Path:
-        """Write :meth:`static_html` to ``path``; returns the path."""
-        path = Path(path)
-        path.write_text(self.static_html(), encoding="utf-8")
-        return path
+        """Write :meth:`static_html` to ``path`` (atomically); returns the path.
+
+        Raises
+        ------
+        SaveError
+            In plain words: a name or path too long, no permission, a full disk
+            (:func:`tutor.fileio.atomic_write_text`).
+        """
+        return atomic_write_text(path, self.static_html())
 
     @staticmethod
     def legend_html() -> str:
