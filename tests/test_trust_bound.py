@@ -388,3 +388,53 @@ def test_the_dashboard_says_a_folder_or_results_folder_is_too_long(tmp_path, per
     person.setenv("TUTOR_CLASS_DIR", str(tmp_path / DEEP))
     with pytest.raises(InvalidParameterError, match="TUTOR_CLASS_DIR"):
         default_class_folder()
+
+
+# --------------------------------------------------------------------------- 4. blank names
+
+
+@pytest.mark.parametrize("typed", ["", "   ", "\u200b", " \t "])
+def test_a_blank_name_is_refused_and_nothing_is_made(person, tmp_path, typed):
+    from tutor.views.start import MazeExperiment
+
+    form = MazeExperiment(start=True)  # a person: Start at once, nothing typed
+    form.name.value = typed
+    form.go.click()
+    assert form.trainee is None and form.tutors == [] and not form.go.disabled
+    assert "Type your name" in form.problem
+    assert not (tmp_path / "sessions").exists() or not any((tmp_path / "sessions").iterdir())
+    assert "e.g." in form.name.placeholder
+
+
+def test_a_blank_name_with_a_hub_user_is_the_hub_user(person):
+    from tutor.views.start import MazeExperiment
+
+    person.setenv("JUPYTERHUB_USER", "mai")
+    form = MazeExperiment(start=False)
+    assert form.name.placeholder == "mai"
+    form.go.click()
+    assert form.trainee == "mai"
+
+
+def test_no_name_and_none_set_is_refused_by_session_dir(person):
+    from tutor.errors import InvalidParameterError
+    from tutor.framework import Trainee
+    from tutor.framework.record import CODE_TRAINEE
+    from tutor.runtime import default_trainee, session_dir
+
+    assert default_trainee() is None
+    with pytest.raises(InvalidParameterError, match="no name was given"):
+        session_dir(None)
+    for blank in ("", "  ", "\u200b"):
+        with pytest.raises(InvalidParameterError, match="empty"):
+            Trainee.from_name(blank)
+    assert Trainee.from_name(None).name == CODE_TRAINEE  # a run made from code, not typed
+
+
+def test_a_headless_form_records_under_the_name_autoplay_is_given(person):
+    from tutor.views.start import MazeExperiment
+
+    person.setenv("TUTOR_HEADLESS", "1")
+    form = MazeExperiment(start=False)
+    form.autoplay(name="ci run")
+    assert form.finished and form.trainee == "ci run" == form.name.value

@@ -38,6 +38,7 @@ __all__ = [
     "trainee_key",
     "normalise_name",
     "default_trainee",
+    "NO_NAME",
     "safe_text",
     "env_text",
 ]
@@ -136,17 +137,26 @@ def trainee_key(name) -> str:
     return f"{readable}-{digest}" if readable else f"t-{digest}"
 
 
-def default_trainee() -> str:
-    """The trainee's name when none is typed.
+def default_trainee() -> str | None:
+    """The trainee's name when none is typed, or None.
 
     ``TUTOR_TRAINEE`` when an educator set it, else ``JUPYTERHUB_USER`` on a hub, else
-    "trainee".
+    None: there is no made-up name, so runs of trainees who left the name blank never
+    share one folder under it (the start form then asks for a name).
     """
     for var in ("TUTOR_TRAINEE", "JUPYTERHUB_USER"):
         user = env_text(var)
         if user:
             return user
-    return "trainee"
+    return None
+
+
+#: what is said when no name was given and none is set
+NO_NAME = (
+    "no name was given: type your name (a blank one is not used, so that runs of "
+    "trainees who leave it blank never mix under one name), or ask your educator to set "
+    "TUTOR_TRAINEE"
+)
 
 
 def sessions_root() -> Path:
@@ -168,10 +178,12 @@ def sessions_root() -> Path:
 def session_dir(trainee=None) -> Path:
     """The folder for one trainee's run files (created if needed).
 
+    ``trainee`` None is :func:`default_trainee`'s name (refused when there is none).
+
     Raises
     ------
     InvalidParameterError
-        The name is empty, or ``TUTOR_SESSION_DIR`` is a file rather than a folder, or
+        The name is empty or missing, or ``TUTOR_SESSION_DIR`` is a file rather than a folder, or
         too long.
     SaveError
         The folder cannot be made (no permission, a read-only disk).
@@ -182,7 +194,10 @@ def session_dir(trainee=None) -> Path:
             f"TUTOR_SESSION_DIR is {root}, which is a file, not a folder: point it at a "
             "folder (it is made if missing)"
         )
-    folder = root / trainee_key(default_trainee() if trainee is None else trainee)
+    name = default_trainee() if trainee is None else trainee
+    if name is None:
+        raise InvalidParameterError(NO_NAME)
+    folder = root / trainee_key(name)
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

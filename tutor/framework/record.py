@@ -44,6 +44,7 @@ __all__ = [
     "SUPPORTED_VERSIONS",
     "EVENT_KINDS",
     "Trainee",
+    "CODE_TRAINEE",
     "Demo",
     "Test",
     "Event",
@@ -189,6 +190,10 @@ def record_start(attempts: list):
 # ---------------------------------------------------------------- the record's parts
 
 
+#: the name of a run made from code without one (tests, scripts): never a typed name
+CODE_TRAINEE = "trainee"
+
+
 @dataclass(frozen=True)
 class Trainee:
     """Who taught: the name as typed (NFC-normalised) and the folder key derived from it."""
@@ -198,9 +203,17 @@ class Trainee:
 
     @classmethod
     def from_name(cls, name=None) -> Trainee:
-        """The trainee called ``name`` (default: ``JUPYTERHUB_USER`` on a hub, else
-        "trainee"), with the folder key :func:`tutor.runtime.trainee_key` derives."""
-        text = normalise_name(default_trainee() if name is None else name)
+        """The trainee called ``name``, with the folder key :func:`tutor.runtime.trainee_key`
+        derives.
+
+        ``name`` None (a run made from code without a name) is
+        :func:`tutor.runtime.default_trainee`'s name (``TUTOR_TRAINEE``, or
+        ``JUPYTERHUB_USER`` on a hub), else :data:`CODE_TRAINEE`. A blank or empty name is
+        refused; the start form never passes None (it asks for a name instead).
+        """
+        if name is None:
+            name = default_trainee() or CODE_TRAINEE
+        text = normalise_name(name)
         return cls(text, trainee_key(text))
 
     def to_dict(self) -> dict:
