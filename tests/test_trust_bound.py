@@ -438,3 +438,62 @@ def test_a_headless_form_records_under_the_name_autoplay_is_given(person):
     form = MazeExperiment(start=False)
     form.autoplay(name="ci run")
     assert form.finished and form.trainee == "ci run" == form.name.value
+
+
+# --------------------------------------------------------------------------- 5. counts
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["robustness", "--experiment", "1", "--seeds", "1000000000"], "at most 1000 seeds"),
+        (["robustness", "--experiment", "2", "--seeds", "1001"], "at most 1000 seeds"),
+        (["adaptive", "--seeds", "1000000000"], "at most 1000 seeds"),
+        (["adaptive", "--variant-seeds", "5000"], "at most 1000 seeds"),
+        (["reproduce", "--experiment", "1", "--seed", str(2**63)], f"at most {2**63 - 1}"),
+        (["reproduce", "--experiment", "1", "--n", "1000000000"], "at most 3000 teachers"),
+    ],
+    ids=["robustness-1e9", "robustness-1001", "adaptive-1e9", "variant-seeds", "seed", "n"],
+)
+def test_counts_on_the_command_line_are_capped_in_one_line(capsys, argv, words):
+    from tutor.__main__ import main
+
+    with pytest.raises(SystemExit) as end:
+        main([*argv, "--out", "unused"])
+    err = capsys.readouterr().err
+    assert end.value.code == 2 and words in err and err.count("\n") == 1
+
+
+def test_the_caps_are_stated_in_the_help(capsys):
+    from tutor.__main__ import main
+
+    with pytest.raises(SystemExit):
+        main(["robustness", "--help"])
+    assert "at most 1000" in capsys.readouterr().out
+
+
+def test_the_library_caps_seeds_before_any_work():
+    from tutor.errors import InvalidParameterError
+    from tutor.study.limits import MAX_SEEDS
+    from tutor.study.report import check_seeds, robustness
+
+    assert check_seeds(range(3)) == [0, 1, 2] and len(check_seeds(range(MAX_SEEDS))) == MAX_SEEDS
+    for seeds, words in ((range(10**9), "at most 1000 seeds"), ([], "empty"), (5, "list"),
+                         ("012", "list")):
+        with pytest.raises(InvalidParameterError, match=words):
+            robustness(1, seeds)
+    with pytest.raises(InvalidParameterError, match="seed must be"):
+        robustness(1, [0, -1])
+    with pytest.raises(InvalidParameterError, match="seed must be"):
+        robustness(1, [2**63])
+
+
+def test_the_optimal_teachers_counts_are_capped_before_any_work():
+    from tutor.errors import InvalidParameterError
+    from tutor.study.optimal import MAX_CAP, MAX_DRAWS, compute_reference
+
+    for options, words in (({"draws": MAX_DRAWS + 1}, "at most 20"),
+                           ({"pair_draws": 10**9}, "at most 20"),
+                           ({"cap": MAX_CAP + 1}, "at most 200"), ({"draws": 0}, ">= 1")):
+        with pytest.raises(InvalidParameterError, match=words):
+            compute_reference(**options)

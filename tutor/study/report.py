@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import tempfile
 from pathlib import Path
@@ -14,7 +15,8 @@ from ..errors import InvalidFileError, InvalidParameterError, SaveError
 from ..fileio import check_path_length
 from ..resources import asset
 from . import replication, stats
-from .cohort import EXPERIMENTS, CohortResult, StudySettings, run_experiment
+from .cohort import EXPERIMENTS, CohortResult, StudySettings, check_request, run_experiment
+from .limits import MAX_SEEDS
 
 __all__ = [
     "check_out_dir",
@@ -24,6 +26,7 @@ __all__ = [
     "save_result",
     "robustness",
     "robustness_summary",
+    "check_seeds",
     "load_result",
     "load_robustness",
     "BUNDLED",
@@ -276,7 +279,18 @@ def save_result(result: CohortResult, analysis: dict, out, figures: bool = True)
 
 
 def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> pd.DataFrame:
-    """Rerun a cohort for each seed; one row per seed: the conclusions and key numbers."""
+    """Rerun a cohort for each seed; one row per seed: the conclusions and key numbers.
+
+    Raises
+    ------
+    InvalidParameterError
+        Before any work: no seeds, more than :data:`~tutor.study.limits.MAX_SEEDS`, or a
+        seed, ``experiment`` or ``n`` that :func:`~tutor.study.cohort.check_request`
+        refuses.
+    """
+    seeds = check_seeds(seeds)
+    for seed in seeds:
+        check_request(experiment, n, seed)
     rows = []
     for seed in seeds:
         result = run_experiment(experiment, seed=seed, n=n, workers=workers, progress=progress)
@@ -294,6 +308,28 @@ def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> p
             row.update({f"paper-matched rate: {k}": v for k, v in matched.items()})
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+def check_seeds(seeds) -> list[int]:
+    """``seeds`` as a list: at least one, at most :data:`~tutor.study.limits.MAX_SEEDS`.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a collection of seeds, none, or more than ``MAX_SEEDS`` (counted without
+        reading past the limit, so ``range(10**9)`` is refused at once).
+    """
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__iter__"):
+        raise InvalidParameterError(f"seeds must be a list or range of seeds, got {seeds!r}")
+    taken = list(itertools.islice(seeds, MAX_SEEDS + 1))
+    if not taken:
+        raise InvalidParameterError("seeds is empty: give at least one seed, e.g. range(10)")
+    if len(taken) > MAX_SEEDS:
+        raise InvalidParameterError(
+            f"at most {MAX_SEEDS} seeds can be run (each is a whole cohort), got more: give "
+            "fewer seeds, e.g. --seeds 10"
+        )
+    return taken
 
 
 def robustness_summary(table: pd.DataFrame) -> str:
