@@ -12,6 +12,7 @@ from tutor.errors import InvalidParameterError
 from tutor.framework.record import RunRecord
 from tutor.runtime import default_trainee, session_dir
 from tutor.views.start import (
+    HEADLESS_TRAINEE,
     condition_from_env,
     maze_experiment,
     pick_and_place_experiment,
@@ -78,8 +79,11 @@ def test_the_form_waits_for_start_and_shows_nf_first(person, tmp_path):
 
 def test_each_run_appears_when_the_previous_is_finished(person):
     form = maze_experiment()
-    form.go.click()  # no name typed: the default one
-    assert form.trainee == "trainee"
+    form.go.click()  # no name typed and none set: refused, said, nothing starts
+    assert form.trainee is None and form.tutors == [] and "Type your name" in form.problem
+    form.name.value = "Ana"
+    form.go.click()
+    assert form.trainee == "Ana"
     nf = form.tutors[0]
     nf.buttons["Finish"].click()  # no demo yet: refused, VF does not appear
     assert len(form.tutors) == 1 and not nf.finished
@@ -92,9 +96,9 @@ def test_each_run_appears_when_the_previous_is_finished(person):
     assert form.finished
     assert "VR: eta" in form.results()
     for condition in ("NF", "VF", "VR"):
-        record = read_record(session_dir("trainee") / f"{condition}.json")
+        record = read_record(session_dir("Ana") / f"{condition}.json")
         assert record.condition == condition
-        assert record.trainee.name == "trainee" and not record.practice
+        assert record.trainee.name == "Ana" and not record.practice
 
 
 def test_a_wrong_name_is_said_in_the_form_and_nothing_starts(person):
@@ -120,6 +124,7 @@ def test_the_educator_fixes_the_name(person):
 
 def test_practice_runs_are_recorded_as_practice_in_their_own_files(person):
     form = maze_experiment()
+    form.name.value = "Ana"
     form.practice.value = True
     form.go.click()
     nf = form.tutors[0]
@@ -131,9 +136,11 @@ def test_practice_runs_are_recorded_as_practice_in_their_own_files(person):
 
 def test_a_form_run_again_resumes_where_the_trainee_was(person):
     first = maze_experiment()
+    first.name.value = "Ana"
     first.go.click()
     teach_and_finish(first.tutors[0], bundled_demos("maze_good")[:3])
     again = maze_experiment()
+    again.name.value = "Ana"
     again.go.click()
     assert [t.condition for t in again.tutors] == ["NF", "VF"]
     assert again.tutors[0].finished and again.tutors[0].session.n_demos == 3
@@ -142,7 +149,7 @@ def test_a_form_run_again_resumes_where_the_trainee_was(person):
 def test_headless_runs_feed_the_bundled_demos(person):
     person.setenv("TUTOR_HEADLESS", "1")
     form = maze_experiment()
-    assert form.finished and form.trainee == "trainee"
+    assert form.finished and form.trainee == HEADLESS_TRAINEE == form.name.value
     demos = {t.condition: t.session.n_demos for t in form.tutors}
     assert demos == {"NF": 3, "VF": 5, "VR": 5}
     assert "paper's median" in form.results()

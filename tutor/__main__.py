@@ -25,7 +25,7 @@ import argparse
 import os
 import sys
 
-from .study.limits import MAX_TEACHERS
+from .study.limits import MAX_SEED, MAX_SEEDS, MAX_TEACHERS
 
 # one BLAS thread per process (set before numpy loads); the cohort uses processes instead
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -93,20 +93,23 @@ def _parser() -> argparse.ArgumentParser:
     rep = sub.add_parser("reproduce", help="simulate one experiment and compare with the paper")
     common(rep)
     rep.add_argument(
-        "--seed", type=_whole_number(0), default=0, help="random seed >= 0 (default 0)"
+        "--seed", type=_whole_number(0, MAX_SEED), default=0,
+        help=f"random seed, 0 to {MAX_SEED} (default 0)",
     )
     rep.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
     rob = sub.add_parser("robustness", help="rerun an experiment over seeds 0 .. S-1")
     common(rob)
     rob.add_argument(
-        "--seeds", type=_whole_number(1), default=10, help="how many seeds (default 10)"
+        "--seeds", type=_whole_number(1, MAX_SEEDS, " seeds"), default=10,
+        help=f"how many seeds (default 10, at most {MAX_SEEDS})",
     )
     ada = sub.add_parser(
         "adaptive", help="adaptive feedback (and the next-demo hint) against BF, over seeds"
     )
     ada.add_argument(
-        "--seeds", type=_whole_number(2, 1000), default=10,
-        help="seeds 0 .. S-1 of the main study (default 10, at least 2 for a CI over seeds)",
+        "--seeds", type=_whole_number(2, MAX_SEEDS, " seeds"), default=10,
+        help="seeds 0 .. S-1 of the main study (default 10, at least 2 for a CI over seeds, "
+        f"at most {MAX_SEEDS})",
     )
     ada.add_argument("--out", default="results", help="folder for the files (default results/)")
     ada.add_argument(
@@ -114,8 +117,9 @@ def _parser() -> argparse.ArgumentParser:
         help="teachers per seed and policy (default 36; 36-60)",
     )
     ada.add_argument(
-        "--variant-seeds", type=_whole_number(0, 1000), default=None,
-        help="seeds per teacher-model variant for the robustness check (default 3; 0: none)",
+        "--variant-seeds", type=_whole_number(0, MAX_SEEDS, " seeds"), default=None,
+        help="seeds per teacher-model variant for the robustness check (default 3; 0: none; "
+        f"at most {MAX_SEEDS})",
     )
     ada.add_argument(
         "--hf-teachers", type=_whole_number(2, MAX_TEACHERS, " teachers"), default=None,
@@ -160,9 +164,14 @@ def _parser() -> argparse.ArgumentParser:
 
 def class_command(args) -> None:
     """``lfd-tutor class``: read, analyse, print the report and (``--out``) save."""
+    from .errors import InvalidFileError
+    from .fileio import check_path_length
     from .study.classroom import read_class
     from .study.report import check_out_dir
 
+    check_path_length(args.sessions, "the class folder", InvalidFileError)
+    if args.plan is not None:
+        check_path_length(args.plan, "--plan", InvalidFileError)
     if args.out is not None:
         check_out_dir(args.out)
 

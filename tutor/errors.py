@@ -15,6 +15,7 @@ __all__ = [
     "DemoFrameMismatchError",
     "TooFewSamplesError",
     "InvalidParameterError",
+    "InvalidPayloadError",
     "NotFittedError",
     "InvalidFileError",
     "InvalidPlanError",
@@ -47,6 +48,11 @@ class TooFewSamplesError(TutorError, ValueError):
 
 class InvalidParameterError(TutorError, ValueError):
     """A setting is impossible (e.g. a negative number of components)."""
+
+
+class InvalidPayloadError(TutorError, ValueError):
+    """What a page sent to the kernel cannot be used: a stroke that is not a list of
+    points, a field that is not text, a choice not offered, an upload without its bytes."""
 
 
 class NotFittedError(TutorError, RuntimeError):

@@ -25,7 +25,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .errors import InvalidFileError, SaveError
+from .errors import InvalidFileError, InvalidParameterError, SaveError
 
 __all__ = [
     "atomic_write_text",
@@ -36,11 +36,13 @@ __all__ = [
     "parse_json",
     "read_bytes",
     "check_file_name",
+    "check_path_length",
     "save_error",
     "finite_number",
     "megabytes",
     "MAX_FILE_BYTES",
     "MAX_NAME_BYTES",
+    "MAX_PATH_BYTES",
     "STALE_TEMP_SECONDS",
 ]
 
@@ -48,6 +50,8 @@ __all__ = [
 MAX_FILE_BYTES = 50 * 1024 * 1024
 #: the longest file or folder name (in UTF-8 bytes) common file systems accept
 MAX_NAME_BYTES = 255
+#: the longest whole path (in bytes, as absolute path) Linux accepts (PATH_MAX less its NUL)
+MAX_PATH_BYTES = 4095
 #: temporary files of a save older than this were left by a killed process
 STALE_TEMP_SECONDS = 60.0
 
@@ -66,8 +70,10 @@ _CHUNK = 1024 * 1024
 def check_file_name(path) -> str | None:
     """What is wrong with ``path`` as a file name, or None if nothing is.
 
-    Refused: something that is not a path, a NUL character, and a file or folder
-    name longer than :data:`MAX_NAME_BYTES` bytes in UTF-8.
+    Refused: something that is not a path, a NUL character, a file or folder name
+    longer than :data:`MAX_NAME_BYTES` bytes in UTF-8, and a whole path (made absolute)
+    longer than :data:`MAX_PATH_BYTES` bytes. (:func:`check_path_length` also asks the
+    file system for its own limits.)
     """
     if not isinstance(path, (str, os.PathLike)):
         return f"{path!r} is not a file path"
@@ -83,7 +89,88 @@ def check_file_name(path) -> str | None:
                 f"the name {part[:40]!r}... is {size} bytes long, more than the "
                 f"{MAX_NAME_BYTES} a file name can have: use a shorter name"
             )
+    return _whole_path_problem(text, MAX_PATH_BYTES)
+
+
+def _size(text: str) -> int:
+    return len(text.encode("utf-8", "surrogateescape"))
+
+
+def _whole_path_problem(text: str, limit: int, room: int = 0) -> str | None:
+    try:
+        whole = _size(os.path.abspath(text))
+    except (OSError, ValueError):  # no current folder (it was removed)
+        whole = _size(text)
+    if whole + room > limit:
+        spare = f" (and room for the {room} bytes of names made inside it)" if room else ""
+        return (
+            f"the path is {whole} bytes long as a full path, more than the {limit} the file "
+            f"system allows{spare}: use a folder higher up, or shorter names"
+        )
     return None
+
+
+def _limits(path: Path) -> tuple[int, int]:
+    """(longest name, longest path) in bytes on the file system holding ``path``: the
+    limits of its nearest existing folder, or the usual ones where it does not say."""
+    nearest = Path(os.path.abspath(path))
+    while True:
+        try:
+            if nearest.is_dir():
+                break
+        except OSError:  # a part of it is itself too long, or unreadable
+            pass
+        if nearest == nearest.parent:
+            return MAX_NAME_BYTES, MAX_PATH_BYTES
+        nearest = nearest.parent
+    try:
+        name = os.pathconf(nearest, "PC_NAME_MAX")
+        whole = os.pathconf(nearest, "PC_PATH_MAX") - 1
+    except (OSError, ValueError, AttributeError):  # no pathconf (Windows), or no answer
+        return MAX_NAME_BYTES, MAX_PATH_BYTES
+    return min(name, MAX_NAME_BYTES), min(whole, MAX_PATH_BYTES)
+
+
+def check_path_length(path, what: str, error: type[Exception] = InvalidParameterError,
+                      room: int = 0) -> Path:
+    """``path`` as a path, checked against the file system's limits before any use.
+
+    Each file or folder name must fit the file system's longest name (``NAME_MAX``,
+    asked of the nearest existing folder; 255 bytes where it does not say) and the whole
+    path, made absolute, its longest path (``PATH_MAX``, 4096 bytes on Linux), so that
+    no later step fails with ENAMETOOLONG.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    what : str
+        How to call it in the message (e.g. ``"TUTOR_SESSION_DIR"``, ``"--out"``).
+    error : type
+        The :mod:`tutor.errors` class to raise.
+    room : int
+        Bytes to keep free for the names the tutor makes inside it (a folder's files).
+
+    Raises
+    ------
+    error
+        Not a path, a NUL character, a name or the whole path too long.
+    """
+    problem = check_file_name(path)
+    if problem is None:
+        text = os.fspath(path)
+        longest_name, longest_path = _limits(Path(text))
+        for part in Path(text).parts:
+            if _size(part) > longest_name:
+                problem = (
+                    f"the name {part[:40]!r}... is {_size(part)} bytes long, more than the "
+                    f"{longest_name} a file name can have there: use a shorter name"
+                )
+                break
+        else:
+            problem = _whole_path_problem(text, longest_path, room)
+    if problem is not None:
+        raise error(f"{what} ({_shown(path)}): {problem}")
+    return Path(os.fspath(path))
 
 
 def _shown(path) -> str:

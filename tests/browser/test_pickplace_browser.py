@@ -33,6 +33,8 @@ NOTEBOOK = "03_pick_and_place.ipynb"
 # a busy 2-core machine: kernel start, Pinocchio, the meshes
 WIDGET_TIMEOUT_MS = int(os.environ.get("TUTOR_WIDGET_TIMEOUT_MS", 300_000))
 TUTOR = ".lfd-pickplace-tutor"
+#: the name typed in the start form (a blank one is refused)
+BROWSER_TRAINEE = "Browser Trainee"
 LATENCY_KEY = "pickplace_demonstrate_to_3d_ms"
 
 #: Records, in the page, when the last real click on a Demonstrate button happened.
@@ -69,7 +71,7 @@ def runs_near_the_cap(workdir):
     before = os.environ.get("TUTOR_SESSION_DIR")
     os.environ["TUTOR_SESSION_DIR"] = env["TUTOR_SESSION_DIR"]
     try:
-        folder = session_dir(None)
+        folder = session_dir(BROWSER_TRAINEE)
     finally:
         if before is None:
             del os.environ["TUTOR_SESSION_DIR"]
@@ -143,10 +145,12 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
     )
     page.get_by_role("menuitem", name="Run", exact=True).click()
     page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
-    # the start form: choose BF with the mouse, keep the default name, press Start
+    # the start form: choose BF with the mouse, type the name, press Start
     form = page.locator(".lfd-start-form")
     form.wait_for(timeout=WIDGET_TIMEOUT_MS)
     form.locator(".lfd-start-condition").get_by_role("button", name="BF", exact=True).click()
+    form.locator(".lfd-start-name input").click()
+    page.keyboard.type(BROWSER_TRAINEE)
     page.screenshot(path=str(artifacts / "pickplace_start_form.png"))
     form.locator(".lfd-start-go").click()
     tutor = _tutor(page, 1)

@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 
 from ..errors import InvalidFileError, InvalidParameterError
-from ..runtime import default_trainee, normalise_name, trainee_key
+from ..runtime import default_trainee, normalise_name, safe_text, trainee_key
 
 __all__ = [
     "RECORD_FORMAT",
@@ -49,6 +49,7 @@ __all__ = [
     "SUPPORTED_VERSIONS",
     "EVENT_KINDS",
     "Trainee",
+    "CODE_TRAINEE",
     "Demo",
     "Test",
     "Event",
@@ -125,11 +126,13 @@ def _obj(data, path: str, required: tuple[str, ...], optional: tuple[str, ...] =
 
 
 def _str(value, path: str, choices=None) -> str:
+    """Text of a record, made safe to write and print (lone surrogates, as a JSON
+    ``\\udcff`` gives them, become U+FFFD: :func:`tutor.runtime.safe_text`)."""
     if not isinstance(value, str):
         _fail(path, f"must be text, got {type(value).__name__}")
     if choices is not None and value not in choices:
         _fail(path, f"must be one of {', '.join(repr(c) for c in choices)}, got {value!r}")
-    return value
+    return safe_text(value)
 
 
 def _bool(value, path: str) -> bool:
@@ -268,6 +271,10 @@ def record_start(attempts: list):
 # ---------------------------------------------------------------- the record's parts
 
 
+#: the name of a run made from code without one (tests, scripts): never a typed name
+CODE_TRAINEE = "trainee"
+
+
 @dataclass(frozen=True)
 class Trainee:
     """Who taught: the name as typed (NFC-normalised) and the folder key derived from it."""
@@ -277,9 +284,17 @@ class Trainee:
 
     @classmethod
     def from_name(cls, name=None) -> Trainee:
-        """The trainee called ``name`` (default: ``JUPYTERHUB_USER`` on a hub, else
-        "trainee"), with the folder key :func:`tutor.runtime.trainee_key` derives."""
-        text = normalise_name(default_trainee() if name is None else name)
+        """The trainee called ``name``, with the folder key :func:`tutor.runtime.trainee_key`
+        derives.
+
+        ``name`` None (a run made from code without a name) is
+        :func:`tutor.runtime.default_trainee`'s name (``TUTOR_TRAINEE``, or
+        ``JUPYTERHUB_USER`` on a hub), else :data:`CODE_TRAINEE`. A blank or empty name is
+        refused; the start form never passes None (it asks for a name instead).
+        """
+        if name is None:
+            name = default_trainee() or CODE_TRAINEE
+        text = normalise_name(name)
         return cls(text, trainee_key(text))
 
     def to_dict(self) -> dict:

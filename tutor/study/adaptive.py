@@ -60,7 +60,7 @@ from ..errors import InvalidParameterError
 from ..teachers.traits import DEFAULT_POPULATION, Population, TeacherTraits
 from ..workers import one_blas_thread, process_pool
 from .cohort import StudySettings, _rng, _task, rows_of
-from .limits import MAX_TEACHERS
+from .limits import MAX_SEEDS, MAX_TEACHERS
 
 __all__ = [
     "Policy",
@@ -298,7 +298,7 @@ def check_plan(plan: StudyPlan) -> StudyPlan:
     low, high = (2, MAX_TEACHERS) if plan.quick else TEACHERS_RANGE
     n = _whole(plan.n, "the number of teachers (--n)", low, high)
     runs = _whole(plan.runs, "runs", 1, 10)
-    seeds = _whole(plan.seeds, "the number of seeds (--seeds)", 2, 1000)
+    seeds = _whole(plan.seeds, "the number of seeds (--seeds)", 2, MAX_SEEDS)
     policies = _names(plan.policies, POLICIES, "policies")
     variant_policies = _names(plan.variant_policies, POLICIES, "variant_policies")
     variants = _names(plan.variants, VARIANTS, "variants") if plan.variants else ()
@@ -314,13 +314,13 @@ def check_plan(plan: StudyPlan) -> StudyPlan:
         seeds=seeds,
         policies=available_policies(policies),
         variants=variants,
-        variant_seeds=_whole(plan.variant_seeds, "variant_seeds", 0, 1000),
+        variant_seeds=_whole(plan.variant_seeds, "variant_seeds", 0, MAX_SEEDS),
         variant_policies=available_policies(variant_policies),
         n_boot=_whole(plan.n_boot, "n_boot", 100, 100_000),
         hf_teachers=None if plan.hf_teachers is None
         else _whole(plan.hf_teachers, HF_TEACHERS_NAME, 2, n),
         secondary_seeds=None if plan.secondary_seeds is None
-        else _whole(plan.secondary_seeds, "secondary_seeds", 2, 1000),
+        else _whole(plan.secondary_seeds, "secondary_seeds", 2, MAX_SEEDS),
     )
 
 

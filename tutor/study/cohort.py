@@ -38,7 +38,7 @@ from ..errors import InvalidParameterError
 from ..framework.failures import Thresholds, is_ambiguous
 from ..teachers.traits import DEFAULT_POPULATION, Population
 from ..workers import one_blas_thread, process_pool
-from .limits import MAX_TEACHERS
+from .limits import MAX_SEED, MAX_TEACHERS
 
 __all__ = [
     "CohortResult",
@@ -185,8 +185,14 @@ def check_request(experiment, n=None, seed=0, conditions=None) -> tuple[int, int
             f"Experiment 2 needs a multiple of {k} teachers, at least {smallest} (2 per "
             f"condition), got n = {n}; the paper used 36 for its 4"
         )
-    if not isinstance(seed, int | np.integer) or isinstance(seed, bool) or seed < 0:
-        raise InvalidParameterError(f"the seed must be a whole number >= 0, got {seed!r}")
+    if (
+        not isinstance(seed, int | np.integer)
+        or isinstance(seed, bool)
+        or not 0 <= seed <= MAX_SEED
+    ):
+        raise InvalidParameterError(
+            f"the seed must be a whole number from 0 to {MAX_SEED}, got {seed!r}"
+        )
     return int(experiment), int(n), int(seed)
 
 

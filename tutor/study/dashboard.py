@@ -41,10 +41,13 @@ from pathlib import Path
 import ipywidgets as w
 
 from ..errors import InvalidParameterError, TutorError
+from ..fileio import check_path_length
 from ..framework.wording import percent, plural
 from ..runtime import headless, sessions_root
+from ..views.payloads import check_choice, check_text, safely
 from .class_report import BESIDE_LEGEND, analyse_class, as_sentence, class_figure, save_class
 from .classroom import read_class
+from .report import OUT_ROOM
 from .tables import has_no_number, readable_label, readable_table
 
 __all__ = ["ClassDashboard", "class_dashboard", "CLASS_DIR_ENV", "default_class_folder"]
@@ -58,7 +61,7 @@ REFRESH_RANGE = (10, 600)
 def default_class_folder() -> Path:
     """``TUTOR_CLASS_DIR``, or else the tutor's sessions folder."""
     value = os.environ.get(CLASS_DIR_ENV, "").strip()
-    return Path(value) if value else sessions_root()
+    return check_path_length(value, CLASS_DIR_ENV) if value else sessions_root()
 
 
 #: how every text block of the dashboard wraps: between words only (JupyterLab gives a
@@ -175,12 +178,13 @@ class ClassDashboard:
         self.trainees.add_class("lfd-class-trainees")
         self.problems = w.HTML()
         self.problems.add_class("lfd-class-problems")
-        self.refresh_button.on_click(lambda _: self.refresh())
-        self.experiment.observe(lambda _: self.refresh(), "value")
-        self.folder.observe(lambda _: self._folder_changed(), "value")
-        self.auto.observe(lambda change: self._auto(change["new"]), "value")
-        self.save_button.on_click(lambda _: self.save())
-        self.rehearse_button.on_click(lambda _: self.rehearse())
+        # every click and change from the page goes through safely(): nothing raises out
+        self.refresh_button.on_click(lambda _: self._safely(self.refresh))
+        self.experiment.observe(lambda _: self._safely(self.refresh), "value")
+        self.folder.observe(lambda _: self._safely(self._folder_changed), "value")
+        self.auto.observe(lambda _: self._safely(lambda: self._auto(self.auto.value)), "value")
+        self.save_button.on_click(lambda _: self._safely(self.save))
+        self.rehearse_button.on_click(lambda _: self._safely(self.rehearse))
         self.widget = w.VBox(
             [
                 self.folder,
@@ -223,12 +227,29 @@ class ClassDashboard:
             f"{text}</p>"
         )
 
+    def _safely(self, action) -> None:
+        safely(action, lambda text: self._say(html.escape(text), problem=True))
+
+    def class_folder(self) -> Path:
+        """The folder in the folder field (``.`` when it is blank).
+
+        Raises
+        ------
+        InvalidPayloadError
+            The field's value, as the page sent it, is not text or is far too long.
+        InvalidParameterError
+            A name in it, or the whole path, is too long for the file system.
+        """
+        text = check_text(self.folder.value, "the class folder").strip() or "."
+        return check_path_length(text, "the class folder")
+
     def refresh(self) -> None:
         """Read the class folder again and redraw everything (errors are said in words)."""
-        folder = Path(self.folder.value.strip() or ".")
         started = time.perf_counter()
         try:
-            self.result = read_class(folder, self.experiment.value, cache=self._cache)
+            folder = self.class_folder()
+            experiment = check_choice(self.experiment.value, "the experiment", (1, 2))
+            self.result = read_class(folder, experiment, cache=self._cache)
             self.analysis = analyse_class(self.result)
         except TutorError as exc:
             self.result = self.analysis = None
@@ -396,16 +417,18 @@ class ClassDashboard:
 
     def results_folder(self) -> Path:
         """Where Save writes: ``<class folder>_results`` beside the class folder."""
-        folder = Path(self.folder.value.strip() or ".").resolve()
-        return folder.parent / f"{folder.name}_results"
+        folder = self.class_folder().resolve()
+        return check_path_length(
+            folder.parent / f"{folder.name}_results", "the results folder", room=OUT_ROOM
+        )
 
     def save(self) -> None:
         """Write the class's CSV, JSON, report and figure (as ``lfd-tutor class --out``)."""
         if self.result is None:
             self._say("There is nothing to save: the class could not be read.", problem=True)
             return
-        out = self.results_folder()
         try:
+            out = self.results_folder()
             paths = save_class(self.result, self.analysis, out)
         except TutorError as exc:
             self._say(html.escape(str(exc)), problem=True)

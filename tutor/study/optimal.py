@@ -130,9 +130,20 @@ def make_bank(task, draws: int = 3, seed: int = 0, indices=None) -> Bank:
     return lookahead.make_bank(task, draws, seed, indices, recording=careful_recording)
 
 
-def _whole(value, name: str, lowest: int) -> int:
+#: the most careful demos per condition in the bank (--draws; the paper-sized reference
+#: uses 3, and each one more adds a pass over all of B^)
+MAX_DRAWS = 20
+#: the most demos the greedy teacher may give (--cap; it stops at the target long before)
+MAX_CAP = 200
+
+
+def _whole(value, name: str, lowest: int, highest: int | None = None) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < lowest:
         raise InvalidParameterError(f"{name} must be a whole number >= {lowest}, got {value!r}")
+    if highest is not None and value > highest:
+        raise InvalidParameterError(
+            f"{name} must be at most {highest}, got {value!r}: give a smaller number"
+        )
     return int(value)
 
 
@@ -181,7 +192,7 @@ def greedy(task, bank: Bank, cap: int = 10, target: float = 1.0, workers=None) -
     InvalidParameterError
         ``cap`` is not a whole number >= 1 or ``target`` is not in (0, 1].
     """
-    cap = _whole(cap, "cap", 1)
+    cap = _whole(cap, "cap", 1, MAX_CAP)
     if not 0 < target <= 1:
         raise InvalidParameterError(f"target must be in (0, 1], got {target!r}")
     start = time.perf_counter()
@@ -343,7 +354,9 @@ def task_reference(
     ``indices`` restricts the bank to those conditions (a reduced bank, for tests);
     ``log`` (e.g. ``print``) is told each phase's result and time.
     """
-    pair_draws = _whole(pair_draws, "pair_draws", 1)
+    draws = _whole(draws, "draws", 1, MAX_DRAWS)
+    pair_draws = _whole(pair_draws, "pair_draws", 1, MAX_DRAWS)
+    cap = _whole(cap, "cap", 1, MAX_CAP)
     bank = make_bank(task, draws, seed, indices)
     found = greedy(task, bank, cap, workers=workers)
     if log is not None:
@@ -403,7 +416,16 @@ def compute_reference(
         Task name -> the conditions of a reduced bank (tests); default all of B^.
     log : callable, optional
         Told each phase's result and time (the command prints them).
+
+    Raises
+    ------
+    InvalidParameterError
+        Before any work: ``draws`` or ``pair_draws`` not from 1 to :data:`MAX_DRAWS`,
+        ``cap`` not from 1 to :data:`MAX_CAP`.
     """
+    draws = _whole(draws, "draws (--draws)", 1, MAX_DRAWS)
+    pair_draws = _whole(pair_draws, "pair_draws (--pair-draws)", 1, MAX_DRAWS)
+    cap = _whole(cap, "cap (--cap)", 1, MAX_CAP)
     settings = {"draws": draws, "seed": seed, "pair_draws": pair_draws, "cap": cap}
     out = {
         "format": FORMAT,
@@ -438,10 +460,18 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--tasks", nargs="+", default=["maze", "pickplace"], choices=["maze", "pickplace"]
     )
-    parser.add_argument("--draws", type=int, default=3, help="bank demos per condition")
+    parser.add_argument(
+        "--draws", type=int, default=3, help=f"bank demos per condition (at most {MAX_DRAWS})"
+    )
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--pair-draws", type=int, default=1, help="draws in the pair bound")
-    parser.add_argument("--cap", type=int, default=10, help="most demos the greedy teacher gives")
+    parser.add_argument(
+        "--pair-draws", type=int, default=1,
+        help=f"draws in the pair bound (at most {MAX_DRAWS})",
+    )
+    parser.add_argument(
+        "--cap", type=int, default=10,
+        help=f"most demos the greedy teacher gives (at most {MAX_CAP})",
+    )
     parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
     from ..fileio import write_json

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import tempfile
 from pathlib import Path
@@ -11,10 +12,12 @@ import pandas as pd
 
 from .. import paper
 from ..errors import InvalidFileError, InvalidParameterError, SaveError
+from ..fileio import check_path_length
 from ..framework.wording import percent
 from ..resources import asset
 from . import replication, stats
-from .cohort import EXPERIMENTS, CohortResult, StudySettings, run_experiment
+from .cohort import EXPERIMENTS, CohortResult, StudySettings, check_request, run_experiment
+from .limits import MAX_SEEDS
 from .tables import readable_table
 
 __all__ = [
@@ -25,6 +28,7 @@ __all__ = [
     "save_result",
     "robustness",
     "robustness_summary",
+    "check_seeds",
     "load_result",
     "load_robustness",
     "BUNDLED",
@@ -34,6 +38,8 @@ __all__ = [
 #: ``lfd-tutor robustness`` wrote them (seed 0; seeds 0-9): notebook 04 reads them
 #: instead of simulating for a minute
 BUNDLED = asset("cohorts")
+#: bytes kept free below an output folder for the names of the files written in it
+OUT_ROOM = 100
 
 
 def check_out_dir(out) -> Path:
@@ -49,11 +55,14 @@ def check_out_dir(out) -> Path:
 
     Raises
     ------
+    InvalidParameterError
+        ``out`` is not a path, or too long for the file system with room for the files
+        written in it (:func:`tutor.fileio.check_path_length`).
     SaveError
         ``out`` (or a folder on the way to it) is a file, or the folder is read-only or
         otherwise cannot be written.
     """
-    out = Path(out)
+    out = check_path_length(out, "the output folder (--out)", room=OUT_ROOM)
     nearest = out
     while not nearest.exists() and nearest != nearest.parent:
         if nearest.is_symlink():  # a dangling link cannot become a folder
@@ -273,7 +282,18 @@ def save_result(result: CohortResult, analysis: dict, out, figures: bool = True)
 
 
 def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> pd.DataFrame:
-    """Rerun a cohort for each seed; one row per seed: the conclusions and key numbers."""
+    """Rerun a cohort for each seed; one row per seed: the conclusions and key numbers.
+
+    Raises
+    ------
+    InvalidParameterError
+        Before any work: no seeds, more than :data:`~tutor.study.limits.MAX_SEEDS`, or a
+        seed, ``experiment`` or ``n`` that :func:`~tutor.study.cohort.check_request`
+        refuses.
+    """
+    seeds = check_seeds(seeds)
+    for seed in seeds:
+        check_request(experiment, n, seed)
     rows = []
     for seed in seeds:
         result = run_experiment(experiment, seed=seed, n=n, workers=workers, progress=progress)
@@ -291,6 +311,28 @@ def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> p
             row.update({f"paper-matched rate: {k}": v for k, v in matched.items()})
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+def check_seeds(seeds) -> list[int]:
+    """``seeds`` as a list: at least one, at most :data:`~tutor.study.limits.MAX_SEEDS`.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a collection of seeds, none, or more than ``MAX_SEEDS`` (counted without
+        reading past the limit, so ``range(10**9)`` is refused at once).
+    """
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__iter__"):
+        raise InvalidParameterError(f"seeds must be a list or range of seeds, got {seeds!r}")
+    taken = list(itertools.islice(seeds, MAX_SEEDS + 1))
+    if not taken:
+        raise InvalidParameterError("seeds is empty: give at least one seed, e.g. range(10)")
+    if len(taken) > MAX_SEEDS:
+        raise InvalidParameterError(
+            f"at most {MAX_SEEDS} seeds can be run (each is a whole cohort), got more: give "
+            "fewer seeds, e.g. --seeds 10"
+        )
+    return taken
 
 
 def robustness_summary(table: pd.DataFrame) -> str:

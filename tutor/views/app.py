@@ -54,7 +54,7 @@ from ..errors import (
 from ..fileio import check_file_name, read_json
 from ..framework import RunRecord, TeachingRun, Trainee
 from ..framework.record import RECORD_FORMAT
-from .uploads import on_upload
+from .uploads import Upload, on_upload
 
 __all__ = ["TutorApp", "RESET_CONFIRM_SECONDS", "guarded"]
 
@@ -663,7 +663,7 @@ class TutorApp:
 
     def _common_widgets(self) -> None:
         """Upload, attempts chooser and status line, wired to the actions above."""
-        self.upload = w.FileUpload(
+        self.upload = Upload(
             accept=".json,.csv",
             multiple=False,
             description="Load file",

@@ -21,7 +21,7 @@ import html
 import ipywidgets as w
 import numpy as np
 
-from ..errors import TutorError
+from ..errors import InvalidPayloadError, TutorError
 from ..framework.wording import percent
 from ..paper import PAPER_MEDIAN_ETA
 from ..runtime import headless
@@ -29,6 +29,7 @@ from ..tasks.maze import MazeTask
 from ..tasks.maze_run import CONDITIONS, MazeRun
 from ..tasks.optimal_reference import optimal_reference
 from .app import TutorApp, guarded
+from .payloads import check_stroke
 from .sketchpad import Sketchpad, layout_spec
 from .text import compose, finish_summary, optimal_sentence
 
@@ -104,12 +105,23 @@ class MazeTutor(TutorApp):
 
     # ---------------------------------------------------------------- actions
 
+    @guarded
     def _on_stroke(self, change) -> None:
-        self.add(np.asarray(self.pad.stroke, dtype=float))
+        """A stroke arrived from the page: checked (:func:`.payloads.check_stroke`) before
+        it is added; one that is not a list of points is said in the panel."""
+        try:
+            raw = check_stroke(self.pad.stroke)
+        except InvalidPayloadError as exc:
+            self.message = f"That stroke was not used: {exc}"
+            return
+        self._add(raw)
 
     @guarded
     def add(self, raw) -> None:
         """Add one demonstration (what a finished stroke does)."""
+        self._add(raw)
+
+    def _add(self, raw) -> None:
         if self._refuse_if_read_only():
             return
         if self.finished:

@@ -30,6 +30,7 @@ from ..runtime import headless
 from ..tasks.pickplace import PickPlaceTask
 from ..tasks.pickplace_protocol import PickPlaceRun
 from .app import TutorApp, guarded
+from .payloads import check_choice
 from .style import DEMO, FAIL, PASS, UNKNOWN
 from .text import (
     HINT_GLYPH,
@@ -237,7 +238,8 @@ class PickPlaceTutor(TutorApp):
         if self._refuse_if_read_only():
             return
         plant = self.selected if plant is None else plant
-        mistake = MISTAKES[self.mistake.value] if mistake is None else mistake
+        if mistake is None:  # the chooser's value, as the page set it
+            mistake = MISTAKES[check_choice(self.mistake.value, "the mistake", tuple(MISTAKES))]
         finished = self.run.attempt.finished
         try:
             self.run.demonstrate(plant, mistake=mistake, rng=self.rng, chosen_by="guided")

@@ -76,8 +76,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, InvalidPayloadError
+from ..fileio import atomic_write_text
 from .meshcat_recorder import SceneRecorder, delete_command, empty_animation, frame_commands
+from .payloads import check_view_message
 from .scene_animation import (
     Track,
     key_samples,
@@ -561,10 +563,15 @@ class Scene3D:
         return page(title, scene_data(chunks), self.legend_html(), caption)
 
     def save_html(self, path) -> Path:
-        """Write :meth:`static_html` to ``path``; returns the path."""
-        path = Path(path)
-        path.write_text(self.static_html(), encoding="utf-8")
-        return path
+        """Write :meth:`static_html` to ``path`` (atomically); returns the path.
+
+        Raises
+        ------
+        SaveError
+            In plain words: a name or path too long, no permission, a full disk
+            (:func:`tutor.fileio.atomic_write_text`).
+        """
+        return atomic_write_text(path, self.static_html())
 
     @staticmethod
     def legend_html() -> str:
@@ -605,10 +612,18 @@ class Scene3D:
             self._pending.append((kind, path, packed))
 
     def _on_view_msg(self, _widget, content, _buffers) -> None:
-        if isinstance(content, dict) and content.get("type") == "hello":
+        """A message from the page's view, checked (:func:`.payloads.check_view_message`);
+        one the tutor does not understand is said in the caption, and nothing is sent."""
+        try:
+            view = check_view_message(content)
+        except InvalidPayloadError as exc:
+            self.message = f"{str(exc)[:1].upper()}{str(exc)[1:]}."
+            self.refresh()
+            return
+        if view is not None:
             # a browser (re)opened the view: send it the whole scene, then changes only
             self._pending = []
-            self._view.send({"type": "full", "to": content.get("id")}, self._scene_chunks())
+            self._view.send({"type": "full", "to": view}, self._scene_chunks())
 
     def _flush(self) -> None:
         if self._pending:

@@ -117,7 +117,10 @@ class Sketchpad(anywidget.AnyWidget):
     rule_circle = traitlets.Dict(allow_none=True, default_value=None).tag(sync=True)
     note = traitlets.Unicode("").tag(sync=True)
     enabled = traitlets.Bool(True).tag(sync=True)
-    stroke = traitlets.List().tag(sync=True)
+    #: whatever the page sent as the last stroke, checked by its observer
+    #: (:func:`tutor.views.payloads.check_stroke`), not by the trait, so that a bad one
+    #: is said in the panel instead of raising inside the widget's message handler
+    stroke = traitlets.Any([]).tag(sync=True)
     stroke_count = traitlets.Int(0).tag(sync=True)
     render_id = traitlets.Int(0).tag(sync=True)
     #: kernel time (ms) from the last stroke's arrival to the picture answering it

@@ -28,7 +28,9 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
 
 ``TUTOR_TRAINEE``
     The trainee's name (see :func:`tutor.runtime.default_trainee`); the name field is
-    then locked. Without it, ``JUPYTERHUB_USER`` is the default on a hub.
+    then locked. Without it, ``JUPYTERHUB_USER`` is the default on a hub. Otherwise a
+    trainee must type a name: a blank one is refused, so that the runs of everyone who
+    leaves it blank never mix under one made-up name.
 ``TUTOR_CONDITION``
     Experiment 2's condition (NF, RF, BF or SF; or AF or HF, beyond the paper) for everyone
     on this server; the
@@ -43,8 +45,9 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
     after they started), they carry on in that condition and the note says so. A plan
     that cannot be used is said in the form, and Start waits for the educator to fix it.
 ``TUTOR_HEADLESS=1``
-    Automated runs: the form starts itself with the default name and feeds the bundled
-    demonstrations to every run (:meth:`StartForm.autoplay`).
+    Automated runs: the form starts itself and feeds the bundled demonstrations to every
+    run (:meth:`StartForm.autoplay`), under the name set as above or else the one
+    ``autoplay`` is given (:data:`HEADLESS_TRAINEE` by default).
 
 Stable CSS classes for browser tests: ``lfd-start-form`` (the whole form),
 ``lfd-start-name``, ``lfd-start-condition``, ``lfd-start-practice``, ``lfd-start-go``
@@ -54,7 +57,7 @@ Stable CSS classes for browser tests: ``lfd-start-form`` (the whole form),
 from __future__ import annotations
 
 import html
-import os
+import unicodedata
 from pathlib import Path
 
 import ipywidgets as w
@@ -63,6 +66,7 @@ from ..errors import InvalidParameterError, InvalidPlanError, TutorError
 from ..framework.assignment import plan_from_env
 from ..runtime import (
     default_trainee,
+    env_text,
     headless,
     normalise_name,
     session_dir,
@@ -72,6 +76,7 @@ from ..runtime import (
 from ..tasks.maze_run import PHASE_ORDER
 from ..tasks.pickplace_protocol import ALL_CONDITIONS, EXTRA_CONDITIONS, RUNS
 from ..tasks.pickplace_protocol import CONDITIONS as PICKPLACE_CONDITIONS
+from .payloads import check_choice, check_text, safely
 from .worked_example import instruction_widget
 
 __all__ = [
@@ -83,9 +88,18 @@ __all__ = [
     "condition_from_env",
     "run_file_name",
     "MAZE_AUTOPLAY",
+    "HEADLESS_TRAINEE",
     "PICKPLACE_AUTOPLAY",
 ]
 
+#: headless runs (TUTOR_HEADLESS=1): the name their runs are recorded under when none is
+#: set (given to :meth:`StartForm.autoplay`; a person's blank name is refused instead)
+HEADLESS_TRAINEE = "headless trainee"
+#: what the form says when Start is pressed with a blank name and none is set
+TYPE_A_NAME = (
+    "Type your name first, then press Start: your runs are saved under it (a blank name "
+    "is not used, so that your runs never mix with those of others who left it blank)."
+)
 #: headless runs: the bundled demonstration set fed to each maze phase
 MAZE_AUTOPLAY = {"NF": "maze_undemonstrated", "VF": "maze_good", "VR": "maze_good"}
 #: headless runs: the plants (and deliberate mistakes) demonstrated in each run
@@ -125,7 +139,7 @@ def condition_from_env() -> str | None:
         ``TUTOR_CONDITION`` is set but is not one of NF, RF, BF, SF (or AF or HF, beyond
         the paper).
     """
-    value = os.environ.get("TUTOR_CONDITION", "").strip()
+    value = env_text("TUTOR_CONDITION")
     if not value:
         return None
     if value.upper() not in ALL_CONDITIONS:
@@ -175,10 +189,10 @@ class StartForm:
         self.folder: Path | None = None
         self.practice_run = False
         self.problem: str | None = None
-        fixed_name = os.environ.get("TUTOR_TRAINEE", "").strip()
+        fixed_name = env_text("TUTOR_TRAINEE")
         self.name = w.Text(
             value=fixed_name,
-            placeholder=default_trainee(),
+            placeholder=default_trainee() or "your name, e.g. Mai Anh",
             description="Your name",
             disabled=bool(fixed_name),
             layout=w.Layout(width="320px"),
@@ -193,7 +207,7 @@ class StartForm:
         self.practice.add_class("lfd-start-practice")
         self.go = w.Button(description="Start", button_style="primary", icon="play")
         self.go.add_class("lfd-start-go")
-        self.go.on_click(lambda _: self.start())
+        self.go.on_click(lambda _: self._safely(self.start))
         self.note = w.HTML()
         self.note.add_class("lfd-start-note")
         self.results_box = w.Output()
@@ -204,7 +218,7 @@ class StartForm:
         )
         self._extra_fields = self._condition_fields()
         self._show_notes()
-        self.name.observe(lambda _: self._name_changed(), names="value")
+        self.name.observe(lambda _: self._safely(self._name_changed), names="value")
         form = w.VBox(
             [
                 w.HTML(f"<b>{html.escape(self.title)}</b>"),
@@ -219,10 +233,10 @@ class StartForm:
         self.widget.add_class("lfd-start-form")
         if start is None:
             start = headless()
-        if start:
+        if start and headless():
+            self.autoplay()
+        elif start:
             self.start()
-            if headless():
-                self.autoplay()
 
     # ---------------------------------------------------------------- the form
 
@@ -241,9 +255,23 @@ class StartForm:
         """The trainee typed in the name field (before Start: Experiment 2's plan follows)."""
 
     def typed_name(self) -> str:
-        """The name the form would start with: the one typed, else the default one."""
-        typed = self.name.value
-        return typed if typed.strip() else default_trainee()
+        """The name the form would start with: the one typed, else the one set for the
+        trainee (``TUTOR_TRAINEE``, or ``JUPYTERHUB_USER`` on a hub).
+
+        Raises
+        ------
+        InvalidPayloadError
+            The field's value, as the page sent it, is not text or is far too long.
+        InvalidParameterError
+            The field is blank and no name is set (:data:`TYPE_A_NAME`).
+        """
+        typed = check_text(self.name.value, "your name")
+        if "".join(c for c in typed if unicodedata.category(c) != "Cf").strip():
+            return typed  # not blank once invisible marks (zero-width spaces) are dropped
+        fallback = default_trainee()
+        if fallback is None:
+            raise InvalidParameterError(TYPE_A_NAME)
+        return fallback
 
     @property
     def condition(self) -> str | None:
@@ -255,6 +283,11 @@ class StartForm:
             if field.has_trait("disabled"):  # (a note has nothing to lock)
                 field.disabled = True
 
+    def _safely(self, action) -> None:
+        """Run what a click or a keystroke asked for; an error is said in the form's note,
+        never raised out of the widget's callback."""
+        safely(action, lambda text: self._say(text, problem=True))
+
     def _say(self, text: str, problem: bool = False) -> None:
         self.problem = text if problem else None
         style = ' style="color:#b00020"' if problem else ""
@@ -263,12 +296,13 @@ class StartForm:
     def start(self) -> None:
         """What Start does: check the name, then show the first run that is not finished.
 
-        A wrong name (empty after trimming, control characters, too long) or condition is
+        A wrong name (blank with none set, control characters, too long) or condition is
         said in the form and nothing starts.
         """
         if self.trainee is not None:
             return
         try:
+            self.check_blocked()
             name = normalise_name(self.typed_name())
             self.check_ready(name)
             folder = session_dir(name)
@@ -284,6 +318,11 @@ class StartForm:
             "every step, so you can close the notebook and carry on later."
         )
         self._advance()
+
+    def check_blocked(self) -> None:
+        """Raise a TutorError when the form cannot start whatever the name (Experiment 2:
+        a wrong TUTOR_CONDITION or class plan, for the educator to fix): said before a
+        missing name, so that the trainee is not asked to type one in vain."""
 
     def check_ready(self, name: str) -> None:
         """Raise a TutorError when the form cannot start for ``name`` (Experiment 2: no
@@ -322,7 +361,7 @@ class StartForm:
             tutor = self.make_tutor(step, path)
             self.tutors.append(tutor)
             for button in tutor.buttons.values():
-                button.on_click(lambda _: self._after_click())
+                button.on_click(lambda _: self._safely(self._after_click))
             header = w.HTML(f"<h3>{html.escape(step['label'])}</h3>")
             intro = instruction_widget(self.experiment, step["condition"], self.practice_run)
             self.stage.children = (*self.stage.children, header, intro, tutor.widget)
@@ -348,14 +387,17 @@ class StartForm:
 
     # ---------------------------------------------------------------- headless runs
 
-    def autoplay(self) -> None:
+    def autoplay(self, name: str = HEADLESS_TRAINEE) -> None:
         """Headless runs only (``TUTOR_HEADLESS=1``): feed each run its bundled demos.
 
-        Starts the form with the default name first if needed; does nothing when a
-        person runs the notebook, and skips runs that are already finished.
+        Starts the form first if needed: under the name typed or set for the trainee,
+        else under ``name``, which the field then shows. Does nothing when a person runs
+        the notebook, and skips runs that are already finished.
         """
         if not headless():
             return
+        if self.trainee is None and not self.name.value.strip() and default_trainee() is None:
+            self.name.value = name
         self.start()
         if self.trainee is None:  # the form refused to start and says why
             raise InvalidParameterError(self.problem or "the form did not start")
@@ -521,9 +563,12 @@ class PickPlaceExperiment(StartForm):
     def condition(self) -> str:
         return self.condition_buttons.value
 
-    def check_ready(self, name: str) -> None:
+    def check_blocked(self) -> None:
         if self._condition_problem is not None:
             raise InvalidParameterError(self._condition_problem)
+
+    def check_ready(self, name: str) -> None:
+        check_choice(self.condition, "the condition", tuple(self.condition_buttons.options))
         if self.class_plan is None:
             return
         self.assignment = self.class_plan.assign(name)

@@ -10,16 +10,22 @@ the widget callback: its message goes to the tutor's message line.
 
 from __future__ import annotations
 
+import datetime as dt
 import logging
 import re
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-from ..errors import SaveError, TutorError
-from ..fileio import MAX_FILE_BYTES, MAX_NAME_BYTES, megabytes, save_error
+import ipywidgets as w
+from ipywidgets.widgets.trait_types import TypedTuple
+from traitlets import Bunch, Dict
 
-__all__ = ["on_upload", "safe_upload_name", "shown_upload_name"]
+from ..errors import InvalidPayloadError, SaveError, TutorError
+from ..fileio import MAX_NAME_BYTES, finite_number, save_error
+from .payloads import check_upload, shown_upload_name
+
+__all__ = ["Upload", "on_upload", "safe_upload_name", "shown_upload_name"]
 
 _log = logging.getLogger(__name__)
 
@@ -28,23 +34,55 @@ _log = logging.getLogger(__name__)
 _UNSAFE = re.compile(r'[\x00-\x1f\x7f/\\:*?"<>|]')
 #: the longest extension kept (longer ones are cut off with the rest of the name)
 _MAX_SUFFIX = 16
-_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 _DEFAULT_STEM = "upload"
 _DEFAULT_SUFFIX = ".json"
+
+
+_FILE_KEYS = ("name", "type", "size", "content")
+
+
+def _files_from_page(js, _widget) -> list:
+    """The page's files as ``FileUpload`` reads them, without raising on a malformed one:
+    what is missing stays missing, for :func:`~tutor.views.payloads.check_upload` to refuse
+    in words (ipywidgets' own reader raises KeyError inside the widget's message handler)."""
+    files = []
+    for entry in js if isinstance(js, list) else [js]:
+        entry = entry if isinstance(entry, dict) else {}
+        item = Bunch({k: entry[k] for k in _FILE_KEYS if k in entry})
+        stamp = entry.get("last_modified")
+        if finite_number(stamp):
+            try:
+                item["last_modified"] = dt.datetime.fromtimestamp(stamp / 1000, tz=dt.UTC)
+            except (OverflowError, OSError, ValueError):
+                pass  # a time no calendar holds: left out, as if not sent
+        files.append(item)
+    return files
+
+
+def _files_to_page(value, _widget) -> list:
+    """The files as ``FileUpload`` sends them back to the page (what is missing as null)."""
+    out = []
+    for item in value:
+        js = {k: item.get(k) for k in _FILE_KEYS}
+        stamp = item.get("last_modified")
+        js["last_modified"] = int(stamp.timestamp() * 1000) if isinstance(stamp, dt.datetime) else 0
+        out.append(js)
+    return out
+
+
+class Upload(w.FileUpload):
+    """``ipywidgets.FileUpload`` whose value, as the page sends it, is read without raising:
+    a malformed file reaches :func:`on_upload`, which says what is wrong."""
+
+    value = TypedTuple(Dict(), help="The file upload value").tag(
+        sync=True, echo_update=False, from_json=_files_from_page, to_json=_files_to_page
+    )
 
 
 def _fit(text: str, n_bytes: int) -> str:
     """``text`` cut (at a character boundary) to at most ``n_bytes`` bytes of UTF-8."""
     data = text.encode("utf-8", "replace")[:n_bytes]
     return data.decode("utf-8", "ignore")
-
-
-def shown_upload_name(name) -> str:
-    """The trainee's file name as it can be shown in a message (printable, at most 120)."""
-    if not isinstance(name, str) or not name.strip():
-        return "the uploaded file"
-    shown = _CONTROL.sub("?", name)
-    return shown if len(shown) <= 120 else f"{shown[:60]}...{shown[-57:]}"
 
 
 def safe_upload_name(name) -> str:
@@ -110,9 +148,11 @@ def on_upload(
     Notes
     -----
     The upload is written to a temporary folder of its own and removed after
-    ``load`` returns. A file larger than :data:`~tutor.fileio.MAX_FILE_BYTES` is
-    refused unwritten. A :class:`~tutor.errors.TutorError` raised by ``load`` (or a
-    failure to store the upload) is reported, never raised out of the callback.
+    ``load`` returns. What arrives is checked first
+    (:func:`~tutor.views.payloads.check_upload`): a file without its content, or larger
+    than :data:`~tutor.fileio.MAX_FILE_BYTES`, is refused unwritten. A
+    :class:`~tutor.errors.TutorError` raised by ``load`` (or a failure to store the
+    upload) is reported, never raised out of the callback.
     """
     show = report if report is not None else _message_line(load)
 
@@ -121,26 +161,11 @@ def on_upload(
         if not files:
             return
         try:
-            item = files[0]
-            raw_name = item.get("name")
-        except (KeyError, IndexError, TypeError, AttributeError):
-            item, raw_name = None, None
+            raw_name, content = check_upload(files)  # what the page sent, checked
+        except InvalidPayloadError as exc:
+            show(f"Nothing was loaded: {exc}")
+            return
         shown = shown_upload_name(raw_name)
-        try:
-            raw = item["content"]
-        except (KeyError, TypeError):
-            raw = None
-        if not isinstance(raw, (bytes, bytearray, memoryview)):
-            show(f"Nothing was loaded: {shown} arrived without its content; upload it again.")
-            return
-        size = memoryview(raw).nbytes
-        if size > MAX_FILE_BYTES:
-            show(
-                f"Nothing was loaded: {shown} is {megabytes(size)}, larger than the "
-                f"{megabytes(MAX_FILE_BYTES)} a tutor file can be; is it the right file?"
-            )
-            return
-        content = bytes(raw)
         name = safe_upload_name(raw_name)
         try:
             with tempfile.TemporaryDirectory(

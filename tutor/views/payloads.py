@@ -1,0 +1,243 @@
+"""What the browser sends, checked before the tutor uses it: one ``check_*`` per kind.
+
+Everything a page can send to the kernel is someone's input and may be anything JSON
+can hold (or, for uploads, any bytes), whatever the page's own script would send:
+
+- a stroke on the maze sketchpad (``Sketchpad.stroke``): :func:`check_stroke`;
+- a text field (the start form's name, the dashboard's class folder): :func:`check_text`;
+- a choice from buttons or a list (a condition, a mistake, an experiment):
+  :func:`check_choice`;
+- a file from a ``FileUpload`` button: :func:`check_upload`;
+- a message from the 3-D view (its "hello" when it opens): :func:`check_view_message`.
+
+Each returns the value in the form the tutor needs, or raises
+:class:`~tutor.errors.InvalidPayloadError` saying in plain words what was wrong.
+The observers and callbacks that receive these payloads catch it and show the message
+in their panel; nothing the page sends raises out of a callback.
+"""
+
+from __future__ import annotations
+
+import logging
+import numbers
+import re
+from collections.abc import Callable
+
+import numpy as np
+
+from ..errors import InvalidDemoError, InvalidPayloadError, TutorError
+from ..fileio import MAX_FILE_BYTES, megabytes
+from ..tpgmm.checks import check_demo
+
+__all__ = [
+    "check_stroke",
+    "check_text",
+    "check_choice",
+    "check_upload",
+    "check_view_message",
+    "shown_upload_name",
+    "safely",
+    "MAX_STROKE_POINTS",
+    "MAX_TEXT_CHARS",
+]
+
+#: the most points one stroke may have (about 3 minutes of drawing at 120 pointer
+#: events a second; a keyboard stroke has one point per millimetre of its path)
+MAX_STROKE_POINTS = 20_000
+#: the longest text a field may send (a file path may be 4096 bytes long)
+MAX_TEXT_CHARS = 4096
+#: a 3-D view's id: what its script makes (letters and digits), at most 32 of them
+_VIEW_ID = re.compile(r"[A-Za-z0-9]{1,32}")
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
+log = logging.getLogger(__name__)
+
+
+def _kind(value) -> str:
+    """What ``value`` is, in words for a message."""
+    if value is None:
+        return "empty (null)"
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, str):
+        return "text"
+    if isinstance(value, dict):
+        return "an object"
+    if isinstance(value, (list, tuple)):
+        return f"a list of {len(value)}"
+    if isinstance(value, numbers.Real):
+        return "a number"
+    return f"a {type(value).__name__}"
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def check_stroke(value, columns: int = 3, max_points: int = MAX_STROKE_POINTS) -> np.ndarray:
+    """A stroke from the sketchpad as a float array (T, ``columns``): [t, x, y] rows.
+
+    Parameters
+    ----------
+    value
+        What arrived: a list of points, each a list of ``columns`` finite numbers
+        (seconds, then metres), time increasing.
+    columns : int
+        Numbers per point.
+    max_points : int
+        The most points a stroke may have (:data:`MAX_STROKE_POINTS`).
+
+    Raises
+    ------
+    InvalidPayloadError
+        Not a list of points; more than ``max_points``; a point that is not a list of
+        ``columns`` numbers (text, an object, null, too few or too many numbers); NaN or
+        inf; fewer than 2 points; time not increasing.
+    """
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if not isinstance(value, (list, tuple)):
+        raise InvalidPayloadError(
+            f"the stroke arrived as {_kind(value)}, not as a list of points: draw it again"
+        )
+    if len(value) > max_points:
+        raise InvalidPayloadError(
+            f"the stroke has {len(value)} points, more than the {max_points} one stroke may "
+            "have: draw it again in one shorter movement"
+        )
+    for i, row in enumerate(value, start=1):
+        if not isinstance(row, (list, tuple)):
+            raise InvalidPayloadError(
+                f"point {i} of the stroke is {_kind(row)}, not a list of {columns} numbers "
+                "(time, x, y): draw it again"
+            )
+        if len(row) != columns:
+            raise InvalidPayloadError(
+                f"point {i} of the stroke has {len(row)} values, not {columns} (time, x, y): "
+                "draw it again"
+            )
+        for cell in row:
+            if not _is_number(cell):
+                raise InvalidPayloadError(
+                    f"point {i} of the stroke holds {_kind(cell)} where a number should be: "
+                    "draw it again"
+                )
+    try:
+        return check_demo(np.array(value, dtype=float), "the stroke", n_columns=columns)
+    except InvalidDemoError as exc:
+        raise InvalidPayloadError(str(exc)) from exc
+
+
+def check_text(value, what: str, max_chars: int = MAX_TEXT_CHARS) -> str:
+    """A text field's value, as text of at most ``max_chars`` characters.
+
+    Raises
+    ------
+    InvalidPayloadError
+        Not text, or longer than ``max_chars``.
+    """
+    if not isinstance(value, str):
+        raise InvalidPayloadError(f"{what} arrived as {_kind(value)}, not as text: type it again")
+    if len(value) > max_chars:
+        raise InvalidPayloadError(
+            f"{what} is {len(value)} characters long, more than the {max_chars} it may have: "
+            "type a shorter one"
+        )
+    return value
+
+
+def check_choice(value, what: str, choices):
+    """``value`` if it is one of ``choices`` (compared with its type: ``True`` is not 1).
+
+    Raises
+    ------
+    InvalidPayloadError
+        ``value`` is not one of the choices offered.
+    """
+    for choice in choices:
+        if type(value) is type(choice) and value == choice:
+            return value
+    offered = ", ".join(str(c) for c in choices)
+    shown = repr(value) if len(repr(value)) <= 40 else f"{repr(value)[:40]}..."
+    raise InvalidPayloadError(
+        f"{what} {shown} is not one of those offered ({offered}): choose again"
+    )
+
+
+def shown_upload_name(name) -> str:
+    """An uploaded file's name as it can be shown in a message (printable, at most 120)."""
+    if not isinstance(name, str) or not name.strip():
+        return "the uploaded file"
+    shown = _CONTROL.sub("?", name)
+    shown = shown.encode("utf-8", "replace").decode("utf-8")  # lone surrogates: "?"
+    return shown if len(shown) <= 120 else f"{shown[:60]}...{shown[-57:]}"
+
+
+def check_upload(value) -> tuple[str | None, bytes]:
+    """The first file of a ``FileUpload`` value: (its name as sent, or None; its bytes).
+
+    Raises
+    ------
+    InvalidPayloadError
+        No file, a file without its content, or one larger than
+        :data:`~tutor.fileio.MAX_FILE_BYTES`; the message names the file as
+        :func:`shown_upload_name` shows it.
+    """
+    try:
+        item = value[0]
+    except (KeyError, IndexError, TypeError):
+        raise InvalidPayloadError("the upload arrived without a file: upload it again") from None
+    name = item.get("name") if isinstance(item, dict) else None
+    name = name if isinstance(name, str) else None
+    shown = shown_upload_name(name)
+    raw = item.get("content") if isinstance(item, dict) else None
+    if not isinstance(raw, (bytes, bytearray, memoryview)):
+        raise InvalidPayloadError(f"{shown} arrived without its content; upload it again")
+    size = memoryview(raw).nbytes
+    if size > MAX_FILE_BYTES:
+        raise InvalidPayloadError(
+            f"{shown} is {megabytes(size)}, larger than the {megabytes(MAX_FILE_BYTES)} a "
+            "tutor file can be; is it the right file?"
+        )
+    return name, bytes(raw)
+
+
+def check_view_message(content) -> str | None:
+    """The view id of a 3-D view's "hello" (sent when it opens), or None for any other
+    message type.
+
+    Raises
+    ------
+    InvalidPayloadError
+        Not an object with a text ``type``, or a hello whose id is not 1 to 32 letters
+        and digits.
+    """
+    if not isinstance(content, dict) or not isinstance(content.get("type"), str):
+        raise InvalidPayloadError(
+            f"the 3-D view sent {_kind(content)}, not a message the tutor knows: reload the page"
+        )
+    if content["type"] != "hello":
+        return None
+    view = content.get("id")
+    if not isinstance(view, str) or not _VIEW_ID.fullmatch(view):
+        raise InvalidPayloadError(
+            "the 3-D view said hello without a proper id (1 to 32 letters and digits): "
+            "reload the page"
+        )
+    return view
+
+
+def safely(action: Callable[[], object], say: Callable[[str], None]) -> None:
+    """Run what a click or a keystroke asked for, so that nothing raises out of the widget's
+    callback: a :class:`~tutor.errors.TutorError` is said with ``say`` in its own words,
+    anything else (a bug) is logged and said as such."""
+    try:
+        action()
+    except TutorError as exc:
+        say(str(exc))
+    except Exception as exc:  # a bug must not leave the page without a word
+        log.exception("%s failed", getattr(action, "__name__", "a callback"))
+        say(
+            f"Something went wrong inside the tutor ({type(exc).__name__}: {exc}). Nothing "
+            "saved was lost; please tell your educator."
+        )
