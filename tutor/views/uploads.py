@@ -17,7 +17,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import SaveError, TutorError
-from ..fileio import MAX_FILE_BYTES, MAX_NAME_BYTES, megabytes, save_error
+from ..fileio import MAX_NAME_BYTES, megabytes, save_error
+from ..limits import MAX_UPLOAD_BYTES
 
 __all__ = ["on_upload", "safe_upload_name", "shown_upload_name"]
 
@@ -110,7 +111,7 @@ def on_upload(
     Notes
     -----
     The upload is written to a temporary folder of its own and removed after
-    ``load`` returns. A file larger than :data:`~tutor.fileio.MAX_FILE_BYTES` is
+    ``load`` returns. A file larger than :data:`~tutor.limits.MAX_UPLOAD_BYTES` is
     refused unwritten. A :class:`~tutor.errors.TutorError` raised by ``load`` (or a
     failure to store the upload) is reported, never raised out of the callback.
     """
@@ -134,10 +135,11 @@ def on_upload(
             show(f"Nothing was loaded: {shown} arrived without its content; upload it again.")
             return
         size = memoryview(raw).nbytes
-        if size > MAX_FILE_BYTES:
+        if size > MAX_UPLOAD_BYTES:
             show(
                 f"Nothing was loaded: {shown} is {megabytes(size)}, larger than the "
-                f"{megabytes(MAX_FILE_BYTES)} a tutor file can be; is it the right file?"
+                f"{megabytes(MAX_UPLOAD_BYTES)} an upload can be (a run of 100 "
+                "demonstrations is about 2 MB); is it the right file?"
             )
             return
         content = bytes(raw)
