@@ -48,6 +48,8 @@ __all__ = ["RunFile", "Listing", "list_class", "read_run_file", "close_zips", "Z
 
 #: what to do about a trainee's zip that cannot be used
 ZIP_AGAIN = "Ask the trainee to zip their run files again and hand the zip in."
+#: control characters, shown as "?" in the name of a zip entry refused for them
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 #: ways of packing a zip entry that are read (what every zip tool makes by default)
 _PACKINGS = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED)
 
@@ -181,7 +183,7 @@ def _list_archive(listing, archive, path, members, prefix, source, nested) -> No
         suffix = name.lower().rpartition(".")[2]
         if info.is_dir() or suffix not in ("json", "zip"):
             continue
-        label = prefix + name
+        label = prefix + _CONTROL.sub("?", name)
         why = _unsafe(info)
         if why is None and hidden(re.split(r"[/\\]", name)):
             continue
@@ -282,7 +284,7 @@ def _unsafe(info: zipfile.ZipInfo) -> str | None:
             "its name leads out of the zip's folder ('..' or an absolute path): refused, "
             "not read"
         )
-    if any(ord(c) < 32 or ord(c) == 127 for c in name):
+    if _CONTROL.search(name):
         return "its name holds control characters: refused, not read"
     if stat.S_ISLNK(info.external_attr >> 16):
         return "a symbolic link inside the zip: links are not followed"
@@ -338,22 +340,31 @@ def _entry_bytes(archive: zipfile.ZipFile, info: zipfile.ZipInfo, cap: tuple) ->
 # ---------------------------------------------------------------- reading one
 
 
-#: zips kept open in this process between reads: (path, (mtime, size, inode)) -> ZipFile
+#: zips kept open in this process between reads: (path, (mtime, size, inode), the entry
+#: names of a zip inside it) -> ZipFile
 _OPEN: dict = {}
 _KEEP_OPEN = 4
 
 
-def _zip_at(path: str) -> zipfile.ZipFile:
-    """The zip at ``path``, opened once per process while it is unchanged (a zip of many
-    run files is not read again for each)."""
+def _zip_at(path: str, inner: tuple[str, ...] = ()) -> zipfile.ZipFile:
+    """The zip at ``path`` (or the zip its entries ``inner`` lead to), opened once per
+    process while the file is unchanged: a zip of many run files is not read again for
+    each of them."""
     info = os.stat(path)
-    key = (path, (info.st_mtime_ns, info.st_size, info.st_ino))
+    key = (path, (info.st_mtime_ns, info.st_size, info.st_ino), inner)
     archive = _OPEN.get(key)
     if archive is None:
+        if inner:
+            outer = _zip_at(path, inner[:-1])
+            data = io.BytesIO(_entry_bytes(outer, outer.getinfo(inner[-1]), _ZIP_CAP))
+            _check_entries(data, f"the zip {inner[-1]}")
+            archive = zipfile.ZipFile(data)
+        else:
+            _check_entries(path, f"the zip file {path}")
+            archive = zipfile.ZipFile(path)
         if len(_OPEN) >= _KEEP_OPEN:
             close_zips()
-        _check_entries(path, f"the zip file {path}")
-        archive = _OPEN[key] = zipfile.ZipFile(path)
+        _OPEN[key] = archive
     return archive
 
 
@@ -382,10 +393,7 @@ def read_run_file(root: Path, run_file: RunFile):
         return read_json(where, "run file", MAX_RUN_FILE_BYTES)
     shown = f"{run_file.label} (in the zip)"
     try:
-        archive = _zip_at(run_file.path)
-        for name in run_file.members[:-1]:
-            data = _entry_bytes(archive, archive.getinfo(name), _ZIP_CAP)
-            archive = zipfile.ZipFile(io.BytesIO(data))
+        archive = _zip_at(run_file.path, run_file.members[:-1])
         data = _entry_bytes(archive, archive.getinfo(run_file.members[-1]), _RUN_CAP)
     except LimitError as exc:
         raise LimitError(f"run file {shown}: {exc}") from exc

@@ -95,7 +95,8 @@ class FileOutcome:
     Attributes
     ----------
     file : str
-        Its path relative to the class folder (or inside the zip).
+        Its path relative to the class folder (or inside the class zip); a file in a
+        trainee's zip is under the zip's path (``ann.zip/NF.json``).
     kind : str
         ``"counted"``, ``"other experiment"`` or one of :data:`PROBLEMS`.
     reason : str
