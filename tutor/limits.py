@@ -47,8 +47,9 @@ MAX_ZIP_RATIO = 100
 #: ... when it unpacks to more than this (small files may pack better harmlessly)
 ZIP_RATIO_FROM_BYTES = 1 * MB
 
-#: demonstrations in one run, and in one demonstration file: the paper's teachers gave at
-#: most about 30; replaying 100 pick-and-place demonstrations takes about half a minute
+#: demonstrations in one run, and in one demonstration file: a simulated teacher gives at
+#: most 20 (its patience); replaying 100 pick-and-place demonstrations takes about half a
+#: minute
 MAX_DEMOS_PER_RUN = 100
 #: samples (rows) in one demonstration of a demonstration file: 5 s recorded at 1 kHz
 #: (the tutor resamples every demonstration to 200)
