@@ -6,9 +6,10 @@ robustness  rerun an experiment over several seeds and report how often the pape
             conclusions hold.
 adaptive    beyond the paper: adaptive test sets (and the next-demo hint) against BF with
             simulated teachers, common random numbers, claims with CIs over seeds.
-class       read a class's saved runs (a folder with one subfolder per trainee, or a zip
-            of it), list every file not counted and why, and run the paper's statistics
-            on the class beside the paper's numbers and a simulated class of its size.
+class       read a class's saved runs (a folder with one subfolder or one zip per
+            trainee, or a zip of it), list every file not counted and why, and run the
+            paper's statistics on the class beside the paper's numbers and a simulated
+            class of its size.
 
 Examples::
 
@@ -139,7 +140,8 @@ def _parser() -> argparse.ArgumentParser:
         "class", help="the paper's statistics on a class's own saved runs"
     )
     cls.add_argument(
-        "sessions", help="the class folder (one subfolder per trainee) or a .zip of it"
+        "sessions",
+        help="the class folder (one subfolder or one .zip per trainee) or a .zip of it",
     )
     cls.add_argument(
         "--experiment",
@@ -159,6 +161,7 @@ def _parser() -> argparse.ArgumentParser:
         "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
     )
     cls.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
+    cls.add_argument("--no-progress", action="store_true", help="no progress bar")
     return parser
 
 
@@ -183,7 +186,7 @@ def class_command(args) -> None:
 
     result = read_class(
         args.sessions, args.experiment, workers=args.workers, plan=args.plan,
-        meanwhile=load_the_rest,
+        meanwhile=load_the_rest, progress=False if args.no_progress else None,
     )
     from .study.class_report import analyse_class, format_class_report, save_class
 

@@ -25,7 +25,11 @@ hand, 0 open and 1 closed). A loaded set has them in the order :data:`KNOWN_COLU
 lists them, or in the order the caller asks for (``load_demos(path, columns=...)``).
 
 Values are checked here only for being a table of finite numbers; the task's
-``preprocess`` checks the rest when a demo is added to a session.
+``preprocess`` checks the rest when a demo is added to a session. A file may hold at
+most :data:`~tutor.limits.MAX_DEMOS_PER_RUN` demonstrations (the most a run can have),
+each of at most :data:`~tutor.limits.MAX_SAMPLES_PER_DEMO` samples, and
+:data:`~tutor.limits.MAX_SAMPLES_PER_FILE` samples in all; a larger file is refused
+(:class:`~tutor.errors.LimitError`) as soon as reading it finds so.
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InvalidDemoError, InvalidFileError, InvalidParameterError
+from .errors import InvalidDemoError, InvalidFileError, InvalidParameterError, LimitError
 from .fileio import (
     atomic_write_text,
     check_file_name,
@@ -47,6 +51,7 @@ from .fileio import (
     read_text,
     write_json,
 )
+from .limits import MAX_DEMOS_PER_RUN, MAX_SAMPLES_PER_DEMO, MAX_SAMPLES_PER_FILE
 from .resources import asset
 
 __all__ = [
@@ -234,6 +239,46 @@ def _demo_to_save(demo, n_columns: int, number: int) -> np.ndarray:
     return array
 
 
+# --------------------------------------------------------------------- caps
+
+
+def _too_many_demos(where: str) -> LimitError:
+    return LimitError(
+        f"{where} holds more than {MAX_DEMOS_PER_RUN} demonstrations, the most a run can "
+        f"have: keep the ones you mean to teach, at most {MAX_DEMOS_PER_RUN} in one file"
+    )
+
+
+def _too_many_samples(where: str) -> LimitError:
+    return LimitError(
+        f"{where} has more than {MAX_SAMPLES_PER_DEMO} samples (rows), the most one "
+        "demonstration may have (the tutor resamples each to 200): keep every 10th "
+        "row, or record at a lower rate"
+    )
+
+
+def _too_many_in_all(where: str) -> LimitError:
+    return LimitError(
+        f"{where} holds more than {MAX_SAMPLES_PER_FILE} samples (rows) in all, the most "
+        "one demonstration file may have: split it into smaller files, or keep every "
+        "10th row"
+    )
+
+
+def _check_json_caps(raw: list, name: str) -> None:
+    """Refuse a JSON file's ``demos`` over the caps before any of them is read."""
+    if len(raw) > MAX_DEMOS_PER_RUN:
+        raise _too_many_demos(name)
+    total = 0
+    for i, demo in enumerate(raw, start=1):
+        n = len(demo) if isinstance(demo, list) else 0
+        if n > MAX_SAMPLES_PER_DEMO:
+            raise _too_many_samples(f"{name}, demo {i}")
+        total += n
+    if total > MAX_SAMPLES_PER_FILE:
+        raise _too_many_in_all(name)
+
+
 # --------------------------------------------------------------------- loading
 
 
@@ -253,6 +298,8 @@ def load_demos(path, columns=None) -> DemoSet:
     ------
     InvalidFileError
         Saying what is wrong with the file and how to fix it.
+    LimitError
+        The file goes over a cap (see the module).
     InvalidParameterError
         ``columns`` names an unknown column.
     """
@@ -291,6 +338,7 @@ def _load_json(path: Path, expected) -> DemoSet:
     raw = data.get("demos")
     if not isinstance(raw, list):
         raise InvalidFileError(f"{path.name}: 'demos' must be a list of demonstrations")
+    _check_json_caps(raw, path.name)
     demos = [
         _table(d, len(found), f"{path.name}, demo {i + 1}")[:, order] for i, d in enumerate(raw)
     ]
@@ -406,6 +454,7 @@ def _load_csv(path: Path, expected) -> DemoSet:
     found = check_columns([names[k] for k in value_at], f"{where}, header")
     order, columns = _arrangement(found, expected, where)
     groups: dict[str, list[list[float]]] = {}
+    samples = 0
     try:
         for row in reader:
             line_no = reader.line_num
@@ -421,7 +470,17 @@ def _load_csv(path: Path, expected) -> DemoSet:
             if not label:
                 raise InvalidFileError(f"{where}, line {line_no}: the 'demo' label is empty")
             at = f"{where}, line {line_no}"
-            groups.setdefault(label, []).append([_csv_number(row[k], at, sep) for k in value_at])
+            group = groups.get(label)
+            if group is None:
+                if len(groups) == MAX_DEMOS_PER_RUN:
+                    raise _too_many_demos(f"{where} (line {line_no} begins one more)")
+                group = groups[label] = []
+            elif len(group) == MAX_SAMPLES_PER_DEMO:
+                raise _too_many_samples(f"{where}, demo {label[:40]!r} (line {line_no})")
+            samples += 1
+            if samples > MAX_SAMPLES_PER_FILE:
+                raise _too_many_in_all(f"{where} (line {line_no})")
+            group.append([_csv_number(row[k], at, sep) for k in value_at])
     except csv.Error as exc:
         raise InvalidFileError(f"{where}, line {reader.line_num}: {exc}") from exc
     if not groups:

@@ -19,6 +19,7 @@ __all__ = [
     "NotFittedError",
     "InvalidFileError",
     "InvalidPlanError",
+    "LimitError",
     "SaveError",
     "SessionInUseError",
     "LockError",
@@ -66,6 +67,12 @@ class InvalidFileError(TutorError, ValueError):
 class InvalidPlanError(InvalidFileError):
     """A class plan (``TUTOR_CLASS_PLAN``) cannot be used: unreadable, a wrong header or
     format, an unknown condition, or one trainee listed with two conditions."""
+
+
+class LimitError(InvalidFileError):
+    """Something goes over one of the tutor's caps (:mod:`tutor.limits`): a file too
+    large, too many files or zip entries, a zip that unpacks to too much, too many
+    demonstrations or samples. The message names the cap and what to do."""
 
 
 class SaveError(TutorError, OSError):

@@ -25,7 +25,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from .errors import InvalidFileError, InvalidParameterError, SaveError
+from .errors import InvalidFileError, InvalidParameterError, LimitError, SaveError
+from .limits import MAX_FILE_BYTES
 
 __all__ = [
     "atomic_write_text",
@@ -46,8 +47,6 @@ __all__ = [
     "STALE_TEMP_SECONDS",
 ]
 
-#: files larger than this are refused (a session of 1000 demos is about 10 MB)
-MAX_FILE_BYTES = 50 * 1024 * 1024
 #: the longest file or folder name (in UTF-8 bytes) common file systems accept
 MAX_NAME_BYTES = 255
 #: the longest whole path (in bytes, as absolute path) Linux accepts (PATH_MAX less its NUL)
@@ -224,27 +223,30 @@ def megabytes(n_bytes: int) -> str:
     return f"{n_bytes / 2**20:.0f} MB" if n_bytes >= 2**20 else f"{n_bytes} bytes"
 
 
-def _too_large(path, what: str, size: int) -> InvalidFileError:
-    return InvalidFileError(
+def _too_large(path, what: str, size: int, limit: int) -> LimitError:
+    return LimitError(
         f"{what} {_shown(path)} is {megabytes(size)} or more, larger than the "
-        f"{megabytes(MAX_FILE_BYTES)} a tutor file can be; is it the right file?"
+        f"{megabytes(limit)} a {'tutor file' if what == 'file' else what} can be; is it "
+        "the right file?"
     )
 
 
-def read_bytes(path, what: str = "file") -> bytes:
-    """The bytes of a regular file of at most :data:`MAX_FILE_BYTES`.
+def read_bytes(path, what: str = "file", limit: int | None = None) -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes (default
+    :data:`MAX_FILE_BYTES`).
 
     The file is opened without blocking and checked with ``fstat`` before anything
     is read: a folder, pipe, device or socket is refused unread, and so is a file
-    that is too large. At most ``MAX_FILE_BYTES`` are read even if the file grows
+    that is too large. At most ``limit`` bytes are read even if the file grows
     meanwhile (then it is refused as too large).
 
     Raises
     ------
     InvalidFileError
-        With what is wrong (missing, a folder, not a regular file, too large,
-        unreadable, a bad name).
+        With what is wrong (missing, a folder, not a regular file, unreadable, a bad
+        name); LimitError when it is too large.
     """
+    limit = MAX_FILE_BYTES if limit is None else limit
     problem = check_file_name(path)
     if problem is not None:
         raise InvalidFileError(f"cannot open {what} {_shown(path)}: {problem}")
@@ -261,17 +263,17 @@ def read_bytes(path, what: str = "file") -> bytes:
                 f"{what} {_shown(path)} is {_kind(info.st_mode)}, not a regular file: "
                 "give the path of a saved file"
             )
-        if info.st_size > MAX_FILE_BYTES:
-            raise _too_large(path, what, info.st_size)
+        if info.st_size > limit:
+            raise _too_large(path, what, info.st_size, limit)
         chunks, total = [], 0
-        while total <= MAX_FILE_BYTES:
-            chunk = os.read(fd, min(_CHUNK, MAX_FILE_BYTES + 1 - total))
+        while total <= limit:
+            chunk = os.read(fd, min(_CHUNK, limit + 1 - total))
             if not chunk:
                 break
             chunks.append(chunk)
             total += len(chunk)
-        if total > MAX_FILE_BYTES:
-            raise _too_large(path, what, total)
+        if total > limit:
+            raise _too_large(path, what, total, limit)
         return b"".join(chunks)
     except OSError as exc:
         raise InvalidFileError(
@@ -281,9 +283,9 @@ def read_bytes(path, what: str = "file") -> bytes:
         os.close(fd)
 
 
-def read_text(path, what: str = "file") -> str:
+def read_text(path, what: str = "file", limit: int | None = None) -> str:
     """A UTF-8 text file (a leading byte-order mark is dropped), checked as :func:`read_bytes`."""
-    return decode_text(read_bytes(path, what), _shown(path), what)
+    return decode_text(read_bytes(path, what, limit), _shown(path), what)
 
 
 def decode_text(data: bytes, shown: str, what: str = "file") -> str:
@@ -347,14 +349,14 @@ def _unique_keys(pairs: list) -> dict:
     return obj
 
 
-def read_json(path, what: str = "file"):
+def read_json(path, what: str = "file", limit: int | None = None):
     """Parse a JSON file, with a clear :class:`InvalidFileError` for any problem.
 
-    Besides what :func:`read_text` refuses: an empty file, invalid JSON, NaN and
-    Infinity, numbers too large for a float (``1e400``, a 400-digit integer), an
-    object with a key given twice, and nesting too deep to parse.
+    Besides what :func:`read_text` refuses (``limit`` as there): an empty file, invalid
+    JSON, NaN and Infinity, numbers too large for a float (``1e400``, a 400-digit
+    integer), an object with a key given twice, and nesting too deep to parse.
     """
-    return parse_json(read_text(path, what), _shown(path), what)
+    return parse_json(read_text(path, what, limit), _shown(path), what)
 
 
 def parse_json(text: str, shown: str, what: str = "file"):

@@ -27,8 +27,15 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import InvalidFileError, InvalidParameterError, TutorError, WrongRunError
+from ..errors import (
+    InvalidFileError,
+    InvalidParameterError,
+    LimitError,
+    TutorError,
+    WrongRunError,
+)
 from ..fileio import read_json, write_json
+from ..limits import MAX_DEMOS_PER_RUN
 from .feedback import reveal
 from .metrics import rule_of
 from .record import Attempt, Demo, Event, RunRecord, Test, Trainee, utc_now
@@ -234,6 +241,12 @@ class TeachingRun:
         return self.session.k if self.feedback == "adaptive" else None
 
     def _replay(self, demos) -> TeachingSession:
+        if len(demos) > MAX_DEMOS_PER_RUN:
+            raise LimitError(
+                f"the run holds {len(demos)} demonstrations, more than the "
+                f"{MAX_DEMOS_PER_RUN} a run can have, so it is not replayed (was it edited "
+                "or made by a program?)"
+            )
         session = self.new_session()
         for i, demo in enumerate(demos, start=1):
             try:
@@ -257,6 +270,17 @@ class TeachingRun:
     def _check_open(self) -> None:
         if self.finished:
             self._refuse_finished()
+
+    def _check_room(self, n: int) -> None:
+        """Refuse ``n`` more demos when they would take the attempt over the cap."""
+        have = self.attempt.n_demos
+        if have + n > MAX_DEMOS_PER_RUN:
+            adding = "one more" if n == 1 else f"{n} more"
+            raise LimitError(
+                f"this run holds {have} demonstrations and cannot take {adding}: a run has "
+                f"at most {MAX_DEMOS_PER_RUN}. Finish it (or press Reset to begin a new "
+                "attempt)"
+            )
 
     @staticmethod
     def _refuse_finished():
@@ -290,10 +314,13 @@ class TeachingRun:
         ------
         RunOverError
             The run is finished.
+        LimitError
+            The attempt already holds :data:`~tutor.limits.MAX_DEMOS_PER_RUN` demos.
         InvalidDemoError, InvalidParameterError
             The demo cannot be used; nothing changed.
         """
         self._check_open()
+        self._check_room(1)
         record = self.session.add_demo(raw, shown=shown, condition=condition)
         if self.feedback == "adaptive":
             shown = record.shown  # the selector's picks, kept so that a replay shows them
@@ -319,6 +346,7 @@ class TeachingRun:
         """
         self._check_open()
         items = list(items)
+        self._check_room(len(items))
         before_record, before_session = self._record, self.session
         trial = self._replay(self.attempt.demos)
         self.session = trial

@@ -3,19 +3,24 @@
 The tutor saves each teaching run as a run record (:mod:`tutor.framework.record`) in
 the trainee's folder. :func:`read_class` reads a whole class: a folder tree (one
 subfolder per trainee, at any depth, as a hub's class folder or the collected
-``sessions/`` folders give it) or a zip of one. Each file is checked in turn, and a
+``sessions/`` folders give it) or a zip of one; a zip inside it is read as one
+trainee's hand-in, their folder (:mod:`.class_files` finds the files, with the caps of
+:mod:`tutor.limits`, and reads zips in memory). Each file is checked in turn, and a
 file that cannot be used is listed with the reason, never counted silently and never
 allowed to stop the others:
 
-- it cannot be read (not JSON, not UTF-8, too large, truncated ...);
+- it cannot be read (not JSON, not UTF-8, too large, truncated, a link out of the
+  class folder, a zip entry refused ...);
 - it is not a run record (another format, a newer version, a field out of range);
-- its demonstrations cannot be replayed by this tutor's learner;
+- its demonstrations cannot be replayed by this tutor's learner (or are more than a run
+  can have, :data:`~tutor.limits.MAX_DEMOS_PER_RUN`);
 - it is a practice run, or its current attempt is not finished;
 - it repeats a run another file already holds (the finished, latest one is counted).
 
 Files of the other experiment are set aside (``other_experiment``), not reported as
-problems; hidden files (``.NF.lock``, temporary files) and files that are not ``.json``
-are not looked at.
+problems; hidden files (``.NF.lock``, temporary files) and files that are neither
+``.json`` nor ``.zip`` are not looked at. A class of more than
+:data:`~tutor.limits.MAX_CLASS_FILES` run files is refused as a whole (LimitError).
 
 Every counted run is replayed through the same learner and scored by the same
 function as the simulated cohorts (:func:`tutor.study.cohort.rows_of`), so the class's
@@ -31,19 +36,22 @@ Examples
 from __future__ import annotations
 
 import os
+import sys
 import zipfile
 from collections import Counter
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path, PurePosixPath
 
 import pandas as pd
 
-from ..errors import InvalidFileError, InvalidParameterError, TutorError
-from ..fileio import MAX_FILE_BYTES, decode_text, megabytes, parse_json, read_json
+from ..errors import InvalidFileError, InvalidParameterError, LimitError, TutorError
 from ..framework.assignment import ClassPlan, load_plan
 from ..framework.record import RunRecord
 from ..framework.wording import plural
+from ..runtime import headless
 from ..workers import one_blas_thread, process_pool
+from .class_files import ZIP_AGAIN, close_zips, hidden, list_class, read_run_file
 from .cohort import EXPERIMENTS, StudySettings, _task, rows_of
 
 __all__ = [
@@ -87,7 +95,8 @@ class FileOutcome:
     Attributes
     ----------
     file : str
-        Its path relative to the class folder (or inside the zip).
+        Its path relative to the class folder (or inside the class zip); a file in a
+        trainee's zip is under the zip's path (``ann.zip/NF.json``).
     kind : str
         ``"counted"``, ``"other experiment"`` or one of :data:`PROBLEMS`.
     reason : str
@@ -288,21 +297,6 @@ class ClassResult:
 # ---------------------------------------------------------------- finding the files
 
 
-def _hidden(parts) -> bool:
-    return any(p.startswith(".") or p == "__MACOSX" for p in parts)
-
-
-def _folder_files(root: Path) -> list[str]:
-    """The ``.json`` files under ``root`` that are not hidden, as relative POSIX paths."""
-    found = []
-    for dirpath, dirnames, filenames in os.walk(root):
-        dirnames[:] = sorted(d for d in dirnames if not _hidden([d]))
-        for name in sorted(filenames):
-            if not name.startswith(".") and name.lower().endswith(".json"):
-                found.append((Path(dirpath) / name).relative_to(root).as_posix())
-    return sorted(found)
-
-
 #: the reason given for a folder of the class that this account cannot read
 CANNOT_READ = (
     "you cannot read this trainee folder (no permission): its runs are not counted. Read "
@@ -313,7 +307,8 @@ CANNOT_READ = (
 
 def _unreadable_folders(root: Path) -> list[FileOutcome]:
     """One "unreadable" outcome (file ``<folder>/``) per folder under ``root`` that this
-    account may not list: :func:`_folder_files`'s walk passes over them in silence."""
+    account may not list: :func:`.class_files.list_class`'s walk passes over them in
+    silence."""
     blocked = []
 
     def note(error: OSError) -> None:
@@ -322,36 +317,8 @@ def _unreadable_folders(root: Path) -> list[FileOutcome]:
             blocked.append(FileOutcome(f"{label}/", "unreadable", CANNOT_READ))
 
     for _, dirnames, _ in os.walk(root, onerror=note):
-        dirnames[:] = [d for d in dirnames if not _hidden([d])]
+        dirnames[:] = [d for d in dirnames if not hidden([d])]
     return sorted(blocked, key=lambda outcome: outcome.file)
-
-
-def _zip_files(archive: zipfile.ZipFile) -> list[str]:
-    names = []
-    for info in archive.infolist():
-        parts = PurePosixPath(info.filename).parts
-        if not (info.is_dir() or _hidden(parts)) and info.filename.lower().endswith(".json"):
-            names.append(info.filename)
-    return sorted(names)
-
-
-def _read_member(archive_path: str, name: str):
-    shown = f"{name} (in the zip)"
-    try:
-        with zipfile.ZipFile(archive_path) as archive:
-            info = archive.getinfo(name)
-            if info.file_size > MAX_FILE_BYTES:
-                raise InvalidFileError(
-                    f"run file {shown} is {megabytes(info.file_size)}, more than a run "
-                    f"record can be ({megabytes(MAX_FILE_BYTES)}): is it the right file?"
-                )
-            with archive.open(info) as member:
-                data = member.read(MAX_FILE_BYTES + 1)
-    except (zipfile.BadZipFile, OSError, RuntimeError, ValueError, KeyError) as exc:
-        raise InvalidFileError(f"run file {shown} cannot be unpacked: {exc}") from exc
-    if len(data) > MAX_FILE_BYTES:
-        raise InvalidFileError(f"run file {shown} is larger than it says: is it the right file?")
-    return parse_json(decode_text(data, shown, "run file"), shown, "run file")
 
 
 @dataclass(frozen=True)
@@ -369,18 +336,12 @@ class _Meta:
 def _read(item):
     """Worker: read, check and (when it may count) replay one file, in one pass.
 
-    ``item`` is (source, is_zip, label, experiment, settings); gives (FileOutcome, _Meta
-    or None, the replay's (kind, reason, run row, demo rows) or None).
+    ``item`` is (class folder or zip, RunFile, label, experiment, settings); gives
+    (FileOutcome, _Meta or None, the replay's (kind, reason, run row, demo rows) or None).
     """
-    source, is_zip, label, experiment, settings = item
-    if is_zip:
-        outcome, record = _check(label, lambda: _read_member(source, label), experiment)
-    else:
-        where = Path(source) / label
-        if not where.resolve().is_relative_to(Path(source).resolve()):
-            reason = "a link to a file outside the class folder: links out are not followed"
-            return FileOutcome(label, "unreadable", f"{reason}. {ASK_AGAIN}"), None, None
-        outcome, record = _check(label, lambda: read_json(where, "run file"), experiment)
+    source, run_file, label, experiment, settings = item
+    read = partial(read_run_file, Path(source), run_file)
+    outcome, record = _check(label, read, experiment, ZIP_AGAIN if run_file.members else "")
     if record is None:
         return outcome, None, None
     meta = _Meta(
@@ -417,16 +378,18 @@ def _sentence(text: str) -> str:
 ASK_AGAIN = "Ask the trainee for the run file again (from their folder in the class folder)."
 
 
-def _check(label: str, read, experiment: int):
-    """(FileOutcome, record or None): every check short of replaying the demos."""
+def _check(label: str, read, experiment: int, again: str = ""):
+    """(FileOutcome, record or None): every check short of replaying the demos (``again``
+    says what to do about a file that cannot be used; default :data:`ASK_AGAIN`)."""
+    again = again or ASK_AGAIN
     try:
         data = read()
     except TutorError as exc:
-        return FileOutcome(label, "unreadable", f"{_sentence(exc)} {ASK_AGAIN}"), None
+        return FileOutcome(label, "unreadable", f"{_sentence(exc)} {again}"), None
     try:
         record = RunRecord.from_dict(data)
     except TutorError as exc:
-        return FileOutcome(label, "not a run record", f"{_sentence(exc)} {ASK_AGAIN}"), None
+        return FileOutcome(label, "not a run record", f"{_sentence(exc)} {again}"), None
     info = _summary(record)
     if record.experiment != experiment:
         reason = f"an Experiment {record.experiment} run: read it with --experiment "
@@ -457,6 +420,8 @@ def _replay(item):
     spec = EXPERIMENTS[experiment]
     try:
         run = RUN_CLASSES[experiment]().from_record(_task(spec["task"], settings), record)
+    except LimitError as exc:  # too many demos to replay: said before any is
+        return label, "cannot be replayed", f"{_sentence(exc)} {ASK_AGAIN}", None, []
     except TutorError as exc:
         reason = (
             f"{_sentence(exc)} The tutor's learner cannot use it (was it edited by hand?). "
@@ -495,6 +460,7 @@ def read_class(
     plan=None,
     meanwhile=None,
     cache: dict | None = None,
+    progress=None,
 ) -> ClassResult:
     """Read and score every run record of a class (see the module docstring).
 
@@ -518,7 +484,12 @@ def read_class(
     cache : dict, optional
         Kept by the caller between reads of the same class folder (the dashboard's
         Refresh): a file whose size and modification time are unchanged is neither read
-        nor replayed again. Ignored for a zip.
+        nor replayed again (a trainee's zip: while the zip is unchanged). Ignored for a
+        class zip.
+    progress : bool or callable, optional
+        A tqdm progress bar on stderr over the files read (default: when stderr is a
+        terminal and ``TUTOR_HEADLESS`` is not set), or ``progress(done, total)`` called
+        after each file.
 
     Returns
     -------
@@ -531,6 +502,9 @@ def read_class(
     InvalidFileError
         ``source`` is neither a folder nor a readable zip file (InvalidPlanError: the
         plan cannot be read).
+    LimitError
+        The class holds more than :data:`~tutor.limits.MAX_CLASS_FILES` run files, or the
+        class zip goes over a zip cap (:mod:`.class_files`).
     """
     if isinstance(experiment, bool) or experiment not in EXPERIMENTS:
         raise InvalidParameterError(
@@ -540,56 +514,92 @@ def read_class(
         isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
     ):
         raise InvalidParameterError(f"workers must be a whole number >= 1, got {workers!r}")
+    step = _progress(progress)
     settings = StudySettings() if settings is None else settings
     path = Path(source)
-    if path.is_dir():
-        labels, is_zip = _folder_files(path), False
-    elif path.is_file() and zipfile.is_zipfile(path):
-        try:
-            with zipfile.ZipFile(path) as archive:
-                labels, is_zip = _zip_files(archive), True
-        except (zipfile.BadZipFile, OSError) as exc:
-            raise InvalidFileError(f"the zip file {path} cannot be read: {exc}") from exc
-    elif path.exists():
-        raise InvalidFileError(
-            f"{path} is neither a folder nor a zip file: give the class folder (one "
-            "subfolder per trainee) or a zip of it"
-        )
-    else:
+    if not path.is_dir() and not (path.is_file() and zipfile.is_zipfile(path)):
+        if path.exists():
+            raise InvalidFileError(
+                f"{path} is neither a folder nor a zip file: give the class folder (one "
+                "subfolder per trainee) or a zip of it"
+            )
         raise InvalidFileError(
             f"there is no folder or zip file at {path}: give the class folder (on a hub, "
             "the folder the kit keeps every trainee's runs in, e.g. /srv/lfd-class)"
         )
+    listing = list_class(path)
+    run_files = {f.label: f for f in listing.files if PurePosixPath(f.label).name not in PLAN_NAMES}
+    labels = list(run_files)
     workers = min(os.cpu_count() or 1, max(1, len(labels))) if workers is None else workers
     roster = _roster(path, plan, experiment)
-    labels = [lab for lab in labels if PurePosixPath(lab).name not in PLAN_NAMES]
     context = (str(path.resolve()), experiment, settings)  # a cache is for one class
-    memo = _Memo(None if is_zip else cache, path, labels, context)
-    with _Pool(workers) as pool:
-        fresh = memo.todo(labels, "file")
-        items = [(str(path), is_zip, lab, experiment, settings) for lab in fresh]
-        done = pool.map(_read, items, meanwhile)
-        outcomes = memo.merge(labels, "file", dict(zip(fresh, done, strict=True)))
-    if not is_zip:
+    memo = _Memo(None if path.is_file() else cache, run_files, context)
+    try:
+        with _Pool(workers) as pool:
+            fresh = memo.todo(labels, "file")
+            items = [(str(path), run_files[lab], lab, experiment, settings) for lab in fresh]
+            done = pool.map(_read, items, meanwhile, step(len(items)))
+            outcomes = memo.merge(labels, "file", dict(zip(fresh, done, strict=True)))
+    finally:
+        close_zips()
+    refused = [(FileOutcome(lab, "unreadable", why), None, None) for lab, why in listing.refused]
+    outcomes = sorted(outcomes + refused, key=lambda o: o[0].file)
+    if path.is_dir():
         outcomes += [(outcome, None, None) for outcome in _unreadable_folders(path)]
     result = _score(path, experiment, outcomes, settings)
     result.roster = roster
     return result
 
 
+def _progress(progress):
+    """``progress`` checked; gives a function of the number of files that makes the
+    progress callback (None for none): a tqdm bar on stderr, or the caller's own."""
+    if not (progress is None or isinstance(progress, bool) or callable(progress)):
+        raise InvalidParameterError(
+            f"progress must be True, False, None or a function of (done, total), got "
+            f"{progress!r}"
+        )
+
+    def make(total: int):
+        if total < 1 or progress is False:
+            return None
+        if callable(progress):
+            return lambda done: progress(done, total)
+        if progress is None and (headless() or not sys.stderr.isatty()):
+            return None
+        from tqdm import tqdm
+
+        tqdm.monitor_interval = 0  # no monitor thread in a process that forks workers
+        return _Bar(tqdm(total=total, desc="Reading the class", unit="file", file=sys.stderr))
+
+    return make
+
+
+class _Bar:
+    """A tqdm bar as a function of the files done so far (closed at the last one)."""
+
+    def __init__(self, bar):
+        self.bar = bar
+
+    def __call__(self, done: int) -> None:
+        self.bar.update(done - self.bar.n)
+        if done >= self.bar.total:
+            self.bar.close()
+
+
 class _Memo:
     """What :func:`read_class` learnt about each file, kept while the file is unchanged."""
 
-    def __init__(self, cache, root: Path, labels, context):
+    def __init__(self, cache, run_files: dict, context):
         self.cache, self.stamps = cache, {}
         if cache is None:
             return
         if cache.get("context") != context:  # another experiment or settings: start over
             cache.clear()
             cache["context"] = context
-        for label in labels:
-            try:
-                info = (root / label).stat()
+        for label, run_file in run_files.items():
+            try:  # a run file in a trainee's zip changes with the zip
+                info = os.stat(run_file.path)
                 self.stamps[label] = (info.st_mtime_ns, info.st_size, info.st_ino)
             except OSError:
                 self.stamps[label] = None
@@ -638,10 +648,15 @@ class _Pool:
             one_blas_thread()
         return self
 
-    def map(self, fn, items, meanwhile=None) -> list:
-        """``fn`` of each item; ``meanwhile()`` runs here while the workers work."""
+    def map(self, fn, items, meanwhile=None, step=None) -> list:
+        """``fn`` of each item; ``meanwhile()`` runs here while the workers work, and
+        ``step(n)`` after each of the n first results."""
         if self._pool is None or len(items) < 2:
-            results = [fn(item) for item in items]
+            results = []
+            for item in items:
+                results.append(fn(item))
+                if step is not None:
+                    step(len(results))
             if meanwhile is not None:
                 meanwhile()
             return results
@@ -649,7 +664,12 @@ class _Pool:
         pending = self._pool.map(fn, items, chunksize=chunk)  # submitted at once
         if meanwhile is not None:
             meanwhile()
-        return list(pending)
+        results = []
+        for result in pending:
+            results.append(result)
+            if step is not None:
+                step(len(results))
+        return results
 
     def __exit__(self, *exc):
         if self._pool is not None:

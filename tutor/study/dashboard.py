@@ -1,7 +1,8 @@
 """The educator's class dashboard (notebook 05, also a Voila app).
 
-It points at the class folder, reads every trainee's runs (:func:`.classroom.read_class`)
-and shows, beside the paper's numbers and a simulated class of the same size
+It points at the class folder, reads every trainee's runs (:func:`.classroom.read_class`;
+a trainee's zip in the folder is read as their folder), saying how far it has got, and
+shows, beside the paper's numbers and a simulated class of the same size
 (:func:`.class_report.analyse_class`):
 
 - how many trainees and runs are counted, and when it was last refreshed;
@@ -127,6 +128,7 @@ class ClassDashboard:
     def __init__(self, folder=None, experiment: int = 1, refresh_seconds: int | None = None):
         experiment, refresh_seconds = check_board_options(experiment, refresh_seconds)
         self._cache: dict = {}
+        self._said_at = 0.0  # when the status last said how far a read has got
         self._timer = None
         self._rehearsing = False
         self.result = None
@@ -245,11 +247,13 @@ class ClassDashboard:
 
     def refresh(self) -> None:
         """Read the class folder again and redraw everything (errors are said in words)."""
-        started = time.perf_counter()
+        started = self._said_at = time.perf_counter()
         try:
             folder = self.class_folder()
             experiment = check_choice(self.experiment.value, "the experiment", (1, 2))
-            self.result = read_class(folder, experiment, cache=self._cache)
+            self.result = read_class(
+                folder, experiment, cache=self._cache, progress=self._reading
+            )
             self.analysis = analyse_class(self.result)
         except TutorError as exc:
             self.result = self.analysis = None
@@ -267,6 +271,14 @@ class ClassDashboard:
             )
             return
         self._draw(time.perf_counter() - started)
+
+    def _reading(self, done: int, total: int) -> None:
+        """Say how many files are read so far (at most twice a second)."""
+        now = time.perf_counter()
+        if done < total and now - self._said_at < 0.5:
+            return
+        self._said_at = now
+        self._say(f"Reading the class: {done} of {plural(total, 'file')}…")
 
     def _folder_changed(self) -> None:
         if not self._rehearsing:

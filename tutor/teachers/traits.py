@@ -26,6 +26,7 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..limits import MAX_DEMOS_PER_RUN
 
 __all__ = ["Population", "TeacherTraits", "DEFAULT_POPULATION", "TASKS"]
 
@@ -277,6 +278,11 @@ class Population:
                 "need 0 < satisfaction_low <= satisfaction_high <= 1",
             ),
             (1 <= self.patience_low <= self.patience_high, "need 1 <= patience_low <= high"),
+            (
+                self.patience_high <= MAX_DEMOS_PER_RUN,
+                f"patience_high must be at most {MAX_DEMOS_PER_RUN}, the most demos a run "
+                "can have (tutor.limits.MAX_DEMOS_PER_RUN)",
+            ),
             (0 <= self.setup_low <= self.setup_high, "need 0 <= setup_low <= setup_high"),
             (0 <= self.test_low <= self.test_high <= 1, "need 0 <= test_low <= test_high <= 1"),
             (

@@ -26,7 +26,8 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import InvalidDemoError, InvalidPayloadError, TutorError
-from ..fileio import MAX_FILE_BYTES, megabytes
+from ..fileio import megabytes
+from ..limits import MAX_STROKE_POINTS, MAX_TEXT_CHARS, MAX_UPLOAD_BYTES
 from ..tpgmm.checks import check_demo
 
 __all__ = [
@@ -41,11 +42,6 @@ __all__ = [
     "MAX_TEXT_CHARS",
 ]
 
-#: the most points one stroke may have (about 3 minutes of drawing at 120 pointer
-#: events a second; a keyboard stroke has one point per millimetre of its path)
-MAX_STROKE_POINTS = 20_000
-#: the longest text a field may send (a file path may be 4096 bytes long)
-MAX_TEXT_CHARS = 4096
 #: a 3-D view's id: what its script makes (letters and digits), at most 32 of them
 _VIEW_ID = re.compile(r"[A-Za-z0-9]{1,32}")
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
@@ -180,7 +176,7 @@ def check_upload(value) -> tuple[str | None, bytes]:
     ------
     InvalidPayloadError
         No file, a file without its content, or one larger than
-        :data:`~tutor.fileio.MAX_FILE_BYTES`; the message names the file as
+        :data:`~tutor.limits.MAX_UPLOAD_BYTES`; the message names the file as
         :func:`shown_upload_name` shows it.
     """
     try:
@@ -194,10 +190,10 @@ def check_upload(value) -> tuple[str | None, bytes]:
     if not isinstance(raw, (bytes, bytearray, memoryview)):
         raise InvalidPayloadError(f"{shown} arrived without its content; upload it again")
     size = memoryview(raw).nbytes
-    if size > MAX_FILE_BYTES:
+    if size > MAX_UPLOAD_BYTES:
         raise InvalidPayloadError(
-            f"{shown} is {megabytes(size)}, larger than the {megabytes(MAX_FILE_BYTES)} a "
-            "tutor file can be; is it the right file?"
+            f"{shown} is {megabytes(size)}, larger than the {megabytes(MAX_UPLOAD_BYTES)} an "
+            "upload can be (a run of 100 demonstrations is about 2 MB); is it the right file?"
         )
     return name, bytes(raw)
 

@@ -150,7 +150,7 @@ def on_upload(
     The upload is written to a temporary folder of its own and removed after
     ``load`` returns. What arrives is checked first
     (:func:`~tutor.views.payloads.check_upload`): a file without its content, or larger
-    than :data:`~tutor.fileio.MAX_FILE_BYTES`, is refused unwritten. A
+    than :data:`~tutor.limits.MAX_UPLOAD_BYTES`, is refused unwritten. A
     :class:`~tutor.errors.TutorError` raised by ``load`` (or a failure to store the
     upload) is reported, never raised out of the callback.
     """
