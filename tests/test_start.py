@@ -94,7 +94,7 @@ def test_each_run_appears_when_the_previous_is_finished(person):
     teach_and_finish(form.tutors[1], bundled_demos("maze_good"))
     teach_and_finish(form.tutors[2], bundled_demos("maze_good"))
     assert form.finished
-    assert "VR: eta" in form.results()
+    assert "VR: η =" in form.results()
     for condition in ("NF", "VF", "VR"):
         record = read_record(session_dir("Ana") / f"{condition}.json")
         assert record.condition == condition
