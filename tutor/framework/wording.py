@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["plural", "change_points", "efficacy_change", "percent", "NOT_A_NUMBER"]
+__all__ = ["plural", "sentence", "change_points", "efficacy_change", "percent", "NOT_A_NUMBER"]
 
 #: what a table or a sentence shows where there is no number (a dash, never "None")
 NOT_A_NUMBER = "–"
@@ -56,3 +56,16 @@ def percent(share) -> str:
     if not math.isfinite(value):
         return NOT_A_NUMBER
     return f"{value:.1%}"
+
+
+def sentence(text, capital: bool = False) -> str:
+    """``text`` ending as a sentence does, with one full stop (none added after ".", "!"
+    or "?"); with ``capital``, its first letter made upper case.
+
+    >>> sentence("kept untouched"), sentence("start a new run."), sentence("a note", True)
+    ('kept untouched.', 'start a new run.', 'A note.')
+    """
+    text = str(text).strip()
+    if capital:
+        text = text[:1].upper() + text[1:]
+    return text if text.endswith((".", "!", "?")) else text + "."

@@ -34,6 +34,7 @@ from pathlib import Path
 
 from ..errors import InvalidFileError, LimitError, TutorError
 from ..fileio import decode_text, megabytes, parse_json, read_json
+from ..framework.wording import sentence
 from ..limits import (
     MAX_CLASS_FILES,
     MAX_FILE_BYTES,
@@ -166,10 +167,10 @@ def _list_hand_in(listing: Listing, root: Path, where: Path, label: str) -> None
     except _TooManyRunFiles:
         raise
     except TutorError as exc:
-        listing.refused.append((label, f"{_sentence(exc)} {ZIP_AGAIN}"))
+        listing.refused.append((label, f"{sentence(exc)} {ZIP_AGAIN}"))
     except (zipfile.BadZipFile, OSError, ValueError, EOFError) as exc:
         why = f"it is not a zip file that can be read ({exc})"
-        listing.refused.append((label, f"{_sentence(why)} {ZIP_AGAIN}"))
+        listing.refused.append((label, f"{sentence(why)} {ZIP_AGAIN}"))
 
 
 def _list_archive(listing, archive, path, members, prefix, source, nested) -> None:
@@ -193,7 +194,7 @@ def _list_archive(listing, archive, path, members, prefix, source, nested) -> No
         if why is None and is_zip and not nested:
             why = "a zip inside a trainee's zip is not opened: unzip it, and zip the run files"
         if why is not None:
-            listing.refused.append((label, f"{_sentence(why)} {ZIP_AGAIN}"))
+            listing.refused.append((label, f"{sentence(why)} {ZIP_AGAIN}"))
         elif not is_zip:
             listing.add(RunFile(label, path, (*members, name)), source)
         else:
@@ -207,18 +208,13 @@ def _list_archive(listing, archive, path, members, prefix, source, nested) -> No
             except _TooManyRunFiles:
                 raise
             except TutorError as exc:
-                listing.refused.append((label, f"{_sentence(exc)} {ZIP_AGAIN}"))
+                listing.refused.append((label, f"{sentence(exc)} {ZIP_AGAIN}"))
             except (zipfile.BadZipFile, OSError, ValueError, EOFError, RuntimeError) as exc:
                 why = f"it is not a zip file that can be read ({exc})"
-                listing.refused.append((label, f"{_sentence(why)} {ZIP_AGAIN}"))
+                listing.refused.append((label, f"{sentence(why)} {ZIP_AGAIN}"))
 
 
 # ---------------------------------------------------------------- the caps
-
-
-def _sentence(text) -> str:
-    text = str(text).strip()
-    return text if text.endswith((".", "!", "?")) else text + "."
 
 
 #: the end of a zip's central directory: its signature, and the record after it
@@ -281,8 +277,7 @@ def _unsafe(info: zipfile.ZipInfo) -> str | None:
     parts = re.split(r"[/\\]", name)
     if name.startswith(("/", "\\")) or re.match(r"[A-Za-z]:", name) or ".." in parts:
         return (
-            "its name leads out of the zip's folder ('..' or an absolute path): refused, "
-            "not read"
+            "its name leads out of the zip's folder ('..' or an absolute path): refused, not read"
         )
     if _CONTROL.search(name):
         return "its name holds control characters: refused, not read"
@@ -311,14 +306,13 @@ def _over_caps(info: zipfile.ZipInfo, limit: int, cap: str, what: str) -> str | 
             f"it unpacks to {megabytes(info.file_size)}, more than the {megabytes(limit)} "
             f"{what} may be (tutor.limits.{cap}): is it the right file?"
         )
-    if (
-        info.file_size > ZIP_RATIO_FROM_BYTES
-        and info.file_size > MAX_ZIP_RATIO * max(info.compress_size, 1)
+    if info.file_size > ZIP_RATIO_FROM_BYTES and info.file_size > MAX_ZIP_RATIO * max(
+        info.compress_size, 1
     ):
         return (
             f"it unpacks to {megabytes(info.file_size)} from "
             f"{megabytes(info.compress_size)}, more than {MAX_ZIP_RATIO} times its packed "
-            "size (tutor.limits.MAX_ZIP_RATIO), as a \"zip bomb\" does: it is not unpacked"
+            'size (tutor.limits.MAX_ZIP_RATIO), as a "zip bomb" does: it is not unpacked'
         )
     return None
 

@@ -27,7 +27,7 @@ import pandas as pd
 
 from .. import paper
 from ..errors import SaveError
-from ..framework.wording import NOT_A_NUMBER, plural
+from ..framework.wording import NOT_A_NUMBER, plural, sentence
 from . import stats
 from .classroom import ClassResult
 from .cohort import EXPERIMENTS
@@ -196,8 +196,9 @@ def _test_lines(tests: dict, experiment: int, who: str) -> list[str]:
     lines = test_lines(tests["stats"], experiment, who)
     lines.append(
         "  the paper's conclusions: "
-        + "; ".join(f"{k} {'holds' if v else 'does not hold'}" for k, v in
-                    tests["conclusions"].items())
+        + "; ".join(
+            f"{k} {'holds' if v else 'does not hold'}" for k, v in tests["conclusions"].items()
+        )
     )
     return lines
 
@@ -267,7 +268,7 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
 
 def as_sentence(note: str) -> str:
     """A :attr:`ClassResult.notes` entry as a sentence: capitalised, with its full stop."""
-    return note[:1].upper() + note[1:] + "."
+    return sentence(note, capital=True)
 
 
 def _class_json(result: ClassResult, analysis: dict) -> dict:

@@ -48,7 +48,7 @@ import pandas as pd
 from ..errors import InvalidFileError, InvalidParameterError, LimitError, TutorError
 from ..framework.assignment import ClassPlan, load_plan
 from ..framework.record import RunRecord
-from ..framework.wording import plural
+from ..framework.wording import plural, sentence
 from ..runtime import headless
 from ..workers import one_blas_thread, process_pool
 from .class_files import ZIP_AGAIN, close_zips, hidden, list_class, read_run_file
@@ -209,7 +209,7 @@ class ClassResult:
 
     @property
     def cannot_read_note(self) -> str:
-        """"You cannot read N trainee folders ..." when there are any, else ""."""
+        """ "You cannot read N trainee folders ..." when there are any, else ""."""
         n = len(self.unreadable_folders)
         if not n:
             return ""
@@ -240,8 +240,7 @@ class ClassResult:
                 missing = "no run file yet"
             elif assigned and taught and taught != {assigned}:
                 missing = (
-                    f"taught {', '.join(sorted(taught))}, but the class plan assigns "
-                    f"{assigned}"
+                    f"taught {', '.join(sorted(taught))}, but the class plan assigns {assigned}"
                 )
             elif self.experiment == 1:
                 done = {f.condition for f in counted}
@@ -370,11 +369,6 @@ def _summary(record: RunRecord) -> dict:
     }
 
 
-def _sentence(text: str) -> str:
-    text = str(text).strip()
-    return text if text.endswith((".", "!", "?")) else text + "."
-
-
 ASK_AGAIN = "Ask the trainee for the run file again (from their folder in the class folder)."
 
 
@@ -385,11 +379,11 @@ def _check(label: str, read, experiment: int, again: str = ""):
     try:
         data = read()
     except TutorError as exc:
-        return FileOutcome(label, "unreadable", f"{_sentence(exc)} {again}"), None
+        return FileOutcome(label, "unreadable", f"{sentence(exc)} {again}"), None
     try:
         record = RunRecord.from_dict(data)
     except TutorError as exc:
-        return FileOutcome(label, "not a run record", f"{_sentence(exc)} {again}"), None
+        return FileOutcome(label, "not a run record", f"{sentence(exc)} {again}"), None
     info = _summary(record)
     if record.experiment != experiment:
         reason = f"an Experiment {record.experiment} run: read it with --experiment "
@@ -421,10 +415,10 @@ def _replay(item):
     try:
         run = RUN_CLASSES[experiment]().from_record(_task(spec["task"], settings), record)
     except LimitError as exc:  # too many demos to replay: said before any is
-        return label, "cannot be replayed", f"{_sentence(exc)} {ASK_AGAIN}", None, []
+        return label, "cannot be replayed", f"{sentence(exc)} {ASK_AGAIN}", None, []
     except TutorError as exc:
         reason = (
-            f"{_sentence(exc)} The tutor's learner cannot use it (was it edited by hand?). "
+            f"{sentence(exc)} The tutor's learner cannot use it (was it edited by hand?). "
             + ASK_AGAIN
         )
         return label, "cannot be replayed", reason, None, []
@@ -556,8 +550,7 @@ def _progress(progress):
     progress callback (None for none): a tqdm bar on stderr, or the caller's own."""
     if not (progress is None or isinstance(progress, bool) or callable(progress)):
         raise InvalidParameterError(
-            f"progress must be True, False, None or a function of (done, total), got "
-            f"{progress!r}"
+            f"progress must be True, False, None or a function of (done, total), got {progress!r}"
         )
 
     def make(total: int):

@@ -54,6 +54,7 @@ from ..errors import (
 from ..fileio import check_file_name, read_json
 from ..framework import RunRecord, TeachingRun, Trainee
 from ..framework.record import RECORD_FORMAT
+from ..framework.wording import sentence
 from .uploads import Upload, on_upload
 
 __all__ = ["TutorApp", "RESET_CONFIRM_SECONDS", "guarded"]
@@ -277,7 +278,10 @@ class TutorApp:
                 record = RunRecord.from_dict(read_json(path, "run file"))
             except InvalidFileError as exc:
                 self._release_lock()
-                return None, f"Could not resume from {path.name}: {exc}. It is kept untouched."
+                return (
+                    None,
+                    f"Could not resume from {path.name}: {sentence(exc)} It is kept untouched.",
+                )
             why = self._not_this_run(record)
             if why is not None:
                 self._release_lock()
@@ -290,7 +294,7 @@ class TutorApp:
             run = self.run_class.from_record(self.task, record)
         except InvalidFileError as exc:
             self._release_lock()
-            return None, f"Could not resume from {path.name}: {exc}. It is kept untouched."
+            return None, f"Could not resume from {path.name}: {sentence(exc)} It is kept untouched."
         self.message = (
             f"{self.message} Resumed {run.n_demos} demonstration(s) from {path.name}."
             + (" This run is finished." if run.finished else "")
@@ -349,8 +353,8 @@ class TutorApp:
             except InvalidFileError as exc:
                 self._release_lock()
                 raise type(exc)(
-                    f"Could not take {path.name} back: {exc}. It is kept untouched and this "
-                    "view stays read-only; run the cell again to save this run beside it."
+                    f"Could not take {path.name} back: {sentence(exc)} It is kept untouched "
+                    "and this view stays read-only; run the cell again to save this run beside it."
                 ) from exc
             self.run = run
         self.read_only = False
@@ -616,8 +620,7 @@ class TutorApp:
             why = str(exc).rstrip()
             why = why if why.endswith((".", "!", "?")) else why + "."
             raise type(exc)(
-                f"Nothing was loaded from {path.name}: {why} This run and its file are "
-                "unchanged."
+                f"Nothing was loaded from {path.name}: {why} This run and its file are unchanged."
             ) from exc
         self._autosave()
 
@@ -639,9 +642,9 @@ class TutorApp:
                 self._load_demo_file(path)
             else:
                 raise InvalidFileError(
-                    f"it is neither a demonstration file (\"format\": \"{DEMOS_FORMAT}\") "
-                    f"nor a run file (\"format\": \"{RECORD_FORMAT}\")"
-                    + (f"; it says \"format\": {kind!r}." if kind else ".")
+                    f'it is neither a demonstration file ("format": "{DEMOS_FORMAT}") '
+                    f'nor a run file ("format": "{RECORD_FORMAT}")'
+                    + (f'; it says "format": {kind!r}.' if kind else ".")
                 )
         else:
             raise InvalidFileError("load a .json or .csv file (demonstrations or a saved run).")
