@@ -269,11 +269,18 @@ def watch_errors(pg) -> list[str]:
     """Collect ``pg``'s page errors and console errors (see :func:`fail_on_errors`).
 
     Tests that mean to cause a console error (e.g. a dead kernel's failed websocket) set
-    ``pg.allowed_console_errors`` to a tuple of substrings to tolerate.
+    ``pg.allowed_console_errors`` to a tuple of substrings to tolerate, and
+    ``pg.allowed_page_errors`` likewise for the page's uncaught errors.
     """
     errors: list[str] = []
     pg.allowed_console_errors = ()
-    pg.on("pageerror", lambda exc: errors.append(f"page error: {exc}\n{exc.stack or ''}"))
+    pg.allowed_page_errors = ()
+
+    def on_page_error(exc):
+        if not any(s in str(exc) for s in pg.allowed_page_errors):
+            errors.append(f"page error: {exc}\n{exc.stack or ''}")
+
+    pg.on("pageerror", on_page_error)
 
     def on_console(msg):
         if msg.type != "error":
