@@ -49,10 +49,13 @@ CLICK_CLOCK = """() => {
 
 
 def _write_run_near_the_cap(folder, task, run: int, left: float, seed: int):
-    """A BF run file with one real demo and the clock spent up to ``left`` seconds."""
+    """A BF run file of the browser's trainee (the name typed in the form: a file of
+    another trainee is not resumed) with one real demo and the clock spent up to ``left``
+    seconds."""
+    from tutor.framework import Trainee
     from tutor.tasks.pickplace_protocol import PickPlaceRun
 
-    record = PickPlaceRun("BF", task, run=run)
+    record = PickPlaceRun("BF", task, run=run, trainee=Trainee.from_name(BROWSER_TRAINEE))
     record.demonstrate(44, rng=np.random.default_rng(seed))
     record.spend(record.cap - record.elapsed - left)
     record.save(folder / f"pickplace_BF_run{run}.json")

@@ -184,9 +184,10 @@ class ClockState:
         why = self._why()
         demos = f"{self.demos} demo{'' if self.demos == 1 else 's'}"
         ends = "ends here" if self.finished else "is over"
+        then = "" if self.finished else ": press Finish run"
         return (
             f"{why[0].upper()}{why[1:]}: the run {ends} with {demos} "
-            f"({clock(self.used)} used, {clock(self.left)} left)."
+            f"({clock(self.used)} used, {clock(self.left)} left){then}."
         )
 
     def refusal(self) -> str:
