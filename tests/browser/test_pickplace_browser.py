@@ -150,7 +150,10 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
     # the start form: choose BF with the mouse, type the name, press Start
     form = page.locator(".lfd-start-form")
     form.wait_for(timeout=WIDGET_TIMEOUT_MS)
-    form.locator(".lfd-start-condition").get_by_role("button", name="BF", exact=True).click()
+    buttons = form.locator(".lfd-start-condition")
+    assert buttons.locator("button.mod-active").count() == 0  # nothing preselected
+    buttons.get_by_role("button", name="BF", exact=True).click()
+    buttons.locator("button.mod-active", has_text="BF").wait_for(timeout=WIDGET_TIMEOUT_MS)
     form.locator(".lfd-start-name input").click()
     page.keyboard.type(BROWSER_TRAINEE)
     page.screenshot(path=str(artifacts / "pickplace_start_form.png"))

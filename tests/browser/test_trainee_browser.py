@@ -191,7 +191,10 @@ def _start(page, form, condition: str, trainee: str, artifacts, shot: str):
         assert "set by your educator" in form.locator(".lfd-start-note").inner_text()
         for button in buttons.get_by_role("button").all():
             assert button.is_disabled()
-    else:
+    else:  # nothing is preselected: the trainee chooses with a click
+        assert buttons.locator("button.mod-active").count() == 0
+        prompt = form.locator(".lfd-start-condition-prompt").inner_text()
+        assert "Choose your condition" in prompt
         buttons.get_by_role("button", name=condition, exact=True).click()
     active = buttons.locator("button.mod-active")
     assert active.inner_text().strip() == condition

@@ -28,9 +28,19 @@ such a demo with a :class:`RunOverError` that says how much time is left (a refu
 changes nothing); the run is over once not even the shortest demonstration fits
 (:data:`SHORTEST_DEMO_SECONDS` plus those attempts), and :meth:`PickPlaceRun.finish`
 then records it as stopped "time".
+
+One voice for the clock: :meth:`PickPlaceRun.clock_state` gives a :class:`ClockState`,
+the clock in the whole seconds it is shown in (time used rounded up to a second, so that
+used and left add up to the 15 minutes), and every word about the clock comes from it:
+the clock line (:meth:`ClockState.line`), the end of a run by the cap
+(:meth:`ClockState.cap_message`: which demo would not have fit, when it would have ended
+and why), and the refusals (:meth:`ClockState.refusal`, :meth:`ClockState.over`).
 """
 
 from __future__ import annotations
+
+import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -44,6 +54,7 @@ from .pickplace import PickPlaceTask
 __all__ = [
     "ADAPTIVE",
     "ALL_CONDITIONS",
+    "ClockState",
     "CONDITIONS",
     "EXTRA_CONDITIONS",
     "HINTED",
@@ -77,6 +88,127 @@ def clock(seconds: float) -> str:
     """``seconds`` as m:ss (e.g. 65 -> "1:05")."""
     whole = max(0, int(seconds))
     return f"{whole // 60}:{whole % 60:02d}"
+
+
+def whole_seconds(seconds: float) -> int:
+    """``seconds`` rounded up to a whole second, as the clock shows time used (0.2 s used
+    is 0:01; a rounding error of a microsecond is no second)."""
+    return max(0, math.ceil(float(seconds) - 1e-6))
+
+
+@dataclass(frozen=True)
+class ClockState:
+    """The Experiment 2 clock at one moment, in whole seconds, and all its words.
+
+    Made by :meth:`PickPlaceRun.clock_state`; the clock line and every message about the
+    cap are read from one of these, so their numbers never disagree.
+
+    Attributes
+    ----------
+    cap : int
+        The run's cap (900 s: the paper's 15 minutes).
+    used : int
+        Seconds used, rounded up to a whole second, at most ``cap``.
+    demos : int
+        The demonstrations given in the current attempt.
+    demo : int
+        Seconds of the next demonstration asked about (rounded up): by default the
+        shortest a person gives (:data:`SHORTEST_DEMO_SECONDS`).
+    shortest : bool
+        ``demo`` is the shortest demonstration (not one that was given).
+    attempts : int
+        The robot's attempts the condition shows after each demo (RF 1, BF 5, AF k).
+    feedback : int
+        Their seconds (25 s each).
+    fits : bool
+        That demonstration and those attempts end by the cap (exactly, not rounded).
+    finished : bool
+        The trainee finished the run, or it was ended by the cap.
+    """
+
+    cap: int
+    used: int
+    demos: int
+    demo: int
+    shortest: bool
+    attempts: int
+    feedback: int
+    fits: bool
+    finished: bool
+
+    @property
+    def left(self) -> int:
+        """Seconds left: the cap less the seconds used."""
+        return self.cap - self.used
+
+    @property
+    def next_demo(self) -> int:
+        """The number the next demonstration would have (1 for the first)."""
+        return self.demos + 1
+
+    @property
+    def needs(self) -> int:
+        """Seconds the next demonstration and the attempts after it take."""
+        return self.demo + self.feedback
+
+    @property
+    def ends(self) -> int:
+        """When the next demonstration and its attempts would end (seconds on the clock);
+        past the cap whenever they do not fit."""
+        ends = self.used + self.needs
+        return ends if self.fits else max(ends, self.cap + 1)
+
+    @property
+    def minutes(self) -> str:
+        """The cap in words, e.g. "15 minutes"."""
+        return f"{self.cap / 60:g} minutes"
+
+    def line(self) -> str:
+        """The clock line, e.g. "13:41 of 15:00 used, 1:19 left"."""
+        return f"{clock(self.used)} of {clock(self.cap)} used, {clock(self.left)} left"
+
+    def _why(self) -> str:
+        """E.g. "demo 7 (at least 30 s) and the robot's 5 attempts after it (125 s) would
+        have ended at 16:16, past the 15 minutes"."""
+        size = f"at least {self.demo} s" if self.shortest else f"about {self.demo} s"
+        attempts = "attempt" if self.attempts == 1 else f"{self.attempts} attempts"
+        after = f" and the robot's {attempts} after it ({self.feedback} s)" if self.attempts else ""
+        return (
+            f"demo {self.next_demo} ({size}){after} would have ended at {clock(self.ends)}, "
+            f"past the {self.minutes}"
+        )
+
+    def cap_message(self) -> str:
+        """Why the cap ended the run (or ends it, once Finish run is pressed): which demo
+        would not have fit, when it would have ended, and the time used and left."""
+        why = self._why()
+        demos = f"{self.demos} demo{'' if self.demos == 1 else 's'}"
+        ends = "ends here" if self.finished else "is over"
+        then = "" if self.finished else ": press Finish run"
+        return (
+            f"{why[0].upper()}{why[1:]}: the run {ends} with {demos} "
+            f"({clock(self.used)} used, {clock(self.left)} left){then}."
+        )
+
+    def refusal(self) -> str:
+        """A demonstration (of ``demo`` seconds) refused because it would end past the cap;
+        nothing changed."""
+        return (
+            f"Only {clock(self.left)} of the {self.minutes} is left: not enough, since "
+            f"{self._why()}, so it was not started ({clock(self.used)} used). A shorter one "
+            "may fit; or press Finish run to end the run with your last complete "
+            "demonstration"
+        )
+
+    def over(self) -> str:
+        """What a demonstration asked for after the run is over is told."""
+        if self.finished:
+            return f"this run is over ({self.line()}): start the next run to go on"
+        return (
+            f"This run is over: only {clock(self.left)} of the {self.minutes} is left, and "
+            f"{self._why()}. Your last complete demonstration counts: press Finish run, "
+            "then start the next run"
+        )
 
 
 class PickPlaceRun(TeachingRun):
@@ -172,31 +304,35 @@ class PickPlaceRun(TeachingRun):
     def finished(self) -> bool:
         return super().finished or self.out_of_time
 
+    def clock_state(self, seconds: float | None = None) -> ClockState:
+        """The clock now, and its words (:class:`ClockState`): the one source of the
+        clock line and of every message about the cap.
+
+        ``seconds`` is the next demonstration asked about (default: the shortest one,
+        :data:`SHORTEST_DEMO_SECONDS`, which says whether the run is over).
+        """
+        shortest = seconds is None
+        seconds = SHORTEST_DEMO_SECONDS if shortest else float(seconds)
+        cap = whole_seconds(self.cap)
+        return ClockState(
+            cap=cap,
+            used=min(whole_seconds(self.elapsed), cap),
+            demos=self.attempt.n_demos,
+            demo=whole_seconds(seconds),
+            shortest=shortest,
+            attempts=int(round(self.feedback_seconds / self.realisation_seconds)),
+            feedback=whole_seconds(self.feedback_seconds),
+            fits=self.fits(seconds),
+            finished=super().finished,
+        )
+
     def clock_text(self) -> str:
-        used, cap = min(self.elapsed, self.cap), self.cap
-        return f"{clock(used)} of {int(cap // 60)}:00 used"
+        """The clock line, e.g. "13:41 of 15:00 used, 1:19 left" (:meth:`ClockState.line`)."""
+        return self.clock_state().line()
 
     def _check_open(self) -> None:
-        if self.out_of_time and not super().finished:
-            raise RunOverError(
-                f"This run is over: only {clock(self.remaining)} of the "
-                f"{self.cap / 60:g} minutes is left, too little for another demonstration"
-                f"{self._with_feedback(SHORTEST_DEMO_SECONDS)}. Your last complete "
-                "demonstration counts: press Finish run, then start the next run"
-            )
-        if self.finished:
-            raise RunOverError(
-                f"this run is over ({self.cap / 60:g} minutes used or finished): start the "
-                "next run to go on"
-            )
-
-    def _with_feedback(self, seconds: float) -> str:
-        """The words for a demo's cost in messages, e.g. ' (about 9 s) and the robot's 5
-        attempts after it (125 s)'."""
-        n = int(round(self.feedback_seconds / self.realisation_seconds))
-        attempts = "attempt" if n == 1 else f"{n} attempts"
-        after = f" and the robot's {attempts} after it ({self.feedback_seconds:.0f} s)"
-        return f" (about {seconds:.0f} s){after if n else ''}"
+        if self.out_of_time or self.finished:
+            raise RunOverError(self.clock_state().over())
 
     def add_demo(self, raw, *, seconds: float | None = None, **options):
         """Add one demonstration (see :meth:`TeachingRun.add_demo`) if it fits the clock.
@@ -209,12 +345,7 @@ class PickPlaceRun(TeachingRun):
         """
         self._check_open()
         if seconds is not None and not self.fits(seconds):
-            raise RunOverError(
-                f"Only {clock(self.remaining)} of the {self.cap / 60:g} minutes is left: not "
-                f"enough for this demonstration{self._with_feedback(seconds)}, so it was not "
-                "started. A shorter one may fit; or press Finish run to end the run with "
-                "your last complete demonstration"
-            )
+            raise RunOverError(self.clock_state(seconds).refusal())
         return super().add_demo(raw, seconds=seconds, **options)
 
     # ---------------------------------------------------------------- the hint (HF)

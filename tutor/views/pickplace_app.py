@@ -253,13 +253,16 @@ class PickPlaceTutor(TutorApp):
 
     def _close_if_out_of_time(self) -> None:
         """The paper's cap: when not even the shortest demonstration fits in the time
-        left, the run ends with the last complete demo (recorded as stopped "time")."""
+        left, the run ends with the last complete demo (recorded as stopped "time"). The
+        panel then says why, from the same clock state as the clock line (:meth:`refresh`)."""
         if self.run.out_of_time and not self.run.attempt.finished:
             self.run.finish("time")
-            self.message = (
-                f"{self.message} The 15 minutes are used up: the run ends with your last "
-                "complete demonstration."
-            ).strip()
+
+    def capped(self) -> bool:
+        """Whether the cap ends this run: not even the shortest demonstration fits, and the
+        trainee did not finish it before (a run finished by "time", or one resumed over)."""
+        attempt = self.run.attempt
+        return self.run.out_of_time and attempt.stopped in ("", "time")
 
     @guarded
     def test(self, plants=None) -> None:
@@ -419,7 +422,8 @@ class PickPlaceTutor(TutorApp):
             self.buttons[name].disabled = run.finished or self.read_only
         for name in ("Finish run", "Reset"):
             self.buttons[name].disabled = self.read_only
-        self.clock.value = f"<b>Time</b>: {run.clock_text()}"
+        timing = run.clock_state()  # the clock line and the cap's words: one state
+        self.clock.value = f"<b>Time</b>: {html.escape(timing.line())}"
         vis = run.visibility()
         practice = " &middot; practice run" if self.record.practice else ""
         parts = [
@@ -447,6 +451,10 @@ class PickPlaceTutor(TutorApp):
             paper = paper_condition(run.condition)
             summary = finish_summary(run, PAPER_MEAN_ETA[paper], "mean over three runs", paper)
             parts.append(f"<div class='lfd-score'><b>Run over.</b> {html.escape(summary)}</div>")
+        if self.capped():
+            parts.append(
+                f"<div class='lfd-cap' role='status'>{html.escape(timing.cap_message())}</div>"
+            )
         parts.append(self.message_html())
         self.panel.value = "".join(parts)
         self._refresh_common()

@@ -10,14 +10,21 @@ instruction and worked example (:mod:`tutor.views.worked_example`):
   trainee has ever seen what the robot learns (as in the paper); finished runs stay on
   the page, with what they revealed.
 - Experiment 2 (:func:`pick_and_place_experiment`): runs 1, 2 and 3 in the chosen
-  condition, one after another in the same way. The paper's four conditions come first
-  (the default is BF); AF, adaptive feedback, and HF, the next-demo hint, are offered
+  condition, one after another in the same way. The paper's four conditions come first,
+  none chosen until the trainee (or the educator) chooses; AF, adaptive feedback, and
+  HF, the next-demo hint, are offered
   after them as extra conditions *beyond the paper* (AF: the robot tries the 5 plants
   it picks itself, at BF's cost, :mod:`tutor.framework.selectors`; HF: nothing is shown,
   as in NF, but the tutor names the plant the robot would learn most from next,
   :mod:`tutor.tasks.hint`).
 
 When every run is finished the trainee's scores are shown beside the paper's.
+
+Experiment 2 is between subjects: the class analysis counts one condition per trainee.
+When the trainee's folder already holds counted runs in another condition of it, Start
+says so ("Ana already has runs in BF (2 finished); ... Start SF anyway?") and the run
+starts only once the trainee confirms (the *Start anyway* button, or Start pressed
+again with the same name and condition).
 
 Run files go to ``tutor.runtime.session_dir(name)``: ``NF.json``, ``VF.json``,
 ``VR.json`` and ``pickplace_<condition>_run<k>.json`` (practice runs get the prefix
@@ -50,8 +57,10 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
     ``autoplay`` is given (:data:`HEADLESS_TRAINEE` by default).
 
 Stable CSS classes for browser tests: ``lfd-start-form`` (the whole form),
-``lfd-start-name``, ``lfd-start-condition``, ``lfd-start-practice``, ``lfd-start-go``
-(the Start button), ``lfd-start-note`` and ``lfd-start-results``.
+``lfd-start-name``, ``lfd-start-condition``, ``lfd-start-condition-prompt`` (what it says
+while none is chosen), ``lfd-start-practice``, ``lfd-start-go`` (the Start button),
+``lfd-start-confirm`` (*Start anyway*, shown only while a warning waits for it),
+``lfd-start-note`` and ``lfd-start-results``.
 """
 
 from __future__ import annotations
@@ -63,7 +72,9 @@ from pathlib import Path
 import ipywidgets as w
 
 from ..errors import InvalidParameterError, InvalidPlanError, TutorError
+from ..fileio import read_json
 from ..framework.assignment import plan_from_env
+from ..framework.record import RunRecord
 from ..runtime import (
     default_trainee,
     env_text,
@@ -87,6 +98,7 @@ __all__ = [
     "pick_and_place_experiment",
     "condition_from_env",
     "run_file_name",
+    "counted_runs",
     "MAZE_AUTOPLAY",
     "HEADLESS_TRAINEE",
     "PICKPLACE_AUTOPLAY",
@@ -108,8 +120,13 @@ PICKPLACE_AUTOPLAY = {
     2: ([0, 99, 9, 90, 44], {}),
     3: ([0, 99, 90, 9], {}),
 }
-#: the condition offered first when neither the trainee nor the educator chose one
-DEFAULT_CONDITION = "BF"
+#: headless runs only: the condition autoplay chooses when nobody else did (a person
+#: always chooses: the form preselects none)
+HEADLESS_CONDITION = "BF"
+#: what the condition chooser says while no condition is chosen
+CHOOSE_CONDITION = "Choose your condition"
+#: what Start says when pressed before a condition is chosen
+NO_CONDITION = "Choose your condition first (the one your educator gave you), then press Start."
 #: what each condition's button says on hover; AF's and HF's say they are beyond the paper
 CONDITION_TIPS = {
     "NF": "NF: no feedback while teaching",
@@ -155,6 +172,39 @@ def run_file_name(experiment: int, condition: str, run: int = 1, practice: bool 
     """The file name of a run in the trainee's folder, e.g. ``VF.json``."""
     stem = condition if experiment == 1 else f"pickplace_{condition}_run{run}"
     return f"{'practice_' if practice else ''}{stem}.json"
+
+
+def counted_runs(name: str, experiment: int = 2) -> dict[str, tuple[int, int]]:
+    """The counted runs of ``name`` in ``experiment``, read from their folder.
+
+    Every ``*.json`` file of the trainee's folder (:func:`tutor.runtime.sessions_root`) that
+    reads as a :class:`~tutor.framework.RunRecord` of this experiment, of this trainee and
+    not a practice run counts, as the class analysis counts it. A file that cannot be read
+    is not counted here (the class analysis lists it with the reason).
+
+    Returns
+    -------
+    dict
+        condition -> (runs, finished runs), in the order the conditions were first found
+        (files by name).
+    """
+    key = trainee_key(name)
+    folder = sessions_root() / key
+    found: dict[str, tuple[int, int]] = {}
+    if not folder.is_dir():
+        return found
+    for path in sorted(folder.glob("*.json")):
+        if path.is_symlink() or not path.is_file():
+            continue  # a link may point anywhere: the class analysis does not count it
+        try:
+            record = RunRecord.from_dict(read_json(path, "run file"))
+        except TutorError:
+            continue
+        if record.experiment != experiment or record.practice or record.trainee.key != key:
+            continue
+        runs, finished = found.get(record.condition, (0, 0))
+        found[record.condition] = (runs + 1, finished + int(record.finished))
+    return found
 
 
 class StartForm:
@@ -208,6 +258,16 @@ class StartForm:
         self.go = w.Button(description="Start", button_style="primary", icon="play")
         self.go.add_class("lfd-start-go")
         self.go.on_click(lambda _: self._safely(self.start))
+        #: what the warning waiting for a confirmation was about (see :meth:`start`)
+        self._confirming: tuple | None = None
+        self.confirm = w.Button(
+            description="Start anyway",
+            button_style="warning",
+            tooltip="Start although the note above warns you",
+            layout=w.Layout(display="none"),
+        )
+        self.confirm.add_class("lfd-start-confirm")
+        self.confirm.on_click(lambda _: self._safely(self.start))
         self.note = w.HTML()
         self.note.add_class("lfd-start-note")
         self.results_box = w.Output()
@@ -219,13 +279,15 @@ class StartForm:
         self._extra_fields = self._condition_fields()
         self._show_notes()
         self.name.observe(lambda _: self._safely(self._name_changed), names="value")
+        self.name.observe(lambda _: self._withdraw_warning(), names="value")
+        self.practice.observe(lambda _: self._withdraw_warning(), names="value")
         form = w.VBox(
             [
                 w.HTML(f"<b>{html.escape(self.title)}</b>"),
                 self.name,
                 *self._extra_fields,
                 self.practice,
-                w.HBox([self.go]),
+                w.HBox([self.go, self.confirm]),
                 self.note,
             ]
         )
@@ -279,9 +341,14 @@ class StartForm:
         return None
 
     def _lock_form(self) -> None:
-        for field in (self.name, self.practice, self.go, *self._extra_fields):
+        self._withdraw_warning()
+        fields = [self.name, self.practice, self.go, self.confirm, *self._extra_fields]
+        while fields:
+            field = fields.pop()
             if field.has_trait("disabled"):  # (a note has nothing to lock)
                 field.disabled = True
+            elif field.has_trait("children"):  # a row of fields
+                fields.extend(field.children)
 
     def _safely(self, action) -> None:
         """Run what a click or a keystroke asked for; an error is said in the form's note,
@@ -297,7 +364,9 @@ class StartForm:
         """What Start does: check the name, then show the first run that is not finished.
 
         A wrong name (blank with none set, control characters, too long) or condition is
-        said in the form and nothing starts.
+        said in the form and nothing starts. A warning (:meth:`warning`, e.g. runs in
+        another condition) is said and nothing starts either, until the trainee confirms:
+        *Start anyway*, or Start pressed again with the same name, condition and practice.
         """
         if self.trainee is not None:
             return
@@ -305,6 +374,13 @@ class StartForm:
             self.check_blocked()
             name = normalise_name(self.typed_name())
             self.check_ready(name)
+            warning = None if self.practice.value else self.warning(name)
+            asked = (trainee_key(name), self.condition, bool(self.practice.value), warning)
+            if warning is not None and self._confirming != asked:
+                self._say(warning, problem=True)
+                self._confirming = asked
+                self.confirm.layout.display = None
+                return
             folder = session_dir(name)
         except TutorError as exc:
             self._say(str(exc), problem=True)
@@ -327,6 +403,21 @@ class StartForm:
     def check_ready(self, name: str) -> None:
         """Raise a TutorError when the form cannot start for ``name`` (Experiment 2: no
         condition); may settle what the runs need (Experiment 2: the plan's condition)."""
+
+    def warning(self, name: str) -> str | None:
+        """What ``name`` must confirm before counted runs start, or None (Experiment 2:
+        counted runs in another condition)."""
+        return None
+
+    def _withdraw_warning(self) -> None:
+        """The name, condition or practice changed: a warning given before no longer
+        stands (Start checks again), and its *Start anyway* goes."""
+        if self._confirming is None:
+            return
+        self._confirming = None
+        self.confirm.layout.display = "none"
+        if self.trainee is None:
+            self._show_notes()
 
     # ---------------------------------------------------------------- the runs
 
@@ -510,17 +601,27 @@ class PickPlaceExperiment(StartForm):
         options = [*PICKPLACE_CONDITIONS, *EXTRA_CONDITIONS]  # the paper's four first
         self.condition_buttons = w.ToggleButtons(
             options=options,
-            value=self._fixed_condition or DEFAULT_CONDITION,
+            value=self._fixed_condition,  # None: nothing is preselected
             description="Condition",
             tooltips=[CONDITION_TIPS[c] for c in options],
             style={"button_width": "56px"},
             disabled=locked,
         )
         self.condition_buttons.add_class("lfd-start-condition")
+        self.condition_prompt = w.HTML()
+        self.condition_prompt.add_class("lfd-start-condition-prompt")
+        self.condition_buttons.observe(lambda _: self._condition_changed(), names="value")
         self.beyond_note = w.HTML(f"<small>{html.escape(BEYOND_THE_PAPER)}</small>")
         self.beyond_note.add_class("lfd-start-beyond")
         self._follow_plan()
-        return [self.condition_buttons, self.beyond_note]
+        self._condition_changed()
+        return [w.HBox([self.condition_buttons, self.condition_prompt]), self.beyond_note]
+
+    def _condition_changed(self) -> None:
+        """Say "Choose your condition" beside the buttons while none is chosen."""
+        chosen = self.condition_buttons.value is not None
+        self.condition_prompt.value = "" if chosen else f"<i>{CHOOSE_CONDITION}</i>"
+        self._withdraw_warning()
 
     def _follow_plan(self) -> None:
         """Show the class plan's condition for the name in the form (before Start)."""
@@ -530,6 +631,7 @@ class PickPlaceExperiment(StartForm):
             self.assignment = self.class_plan.assign(self.typed_name())
         except TutorError:  # a name the form will refuse at Start, and say why
             self.assignment = None
+            self.condition_buttons.value = None
             return
         self.condition_buttons.value = self.assignment.condition
 
@@ -560,7 +662,8 @@ class PickPlaceExperiment(StartForm):
         return notes
 
     @property
-    def condition(self) -> str:
+    def condition(self) -> str | None:
+        """The condition chosen (or set by the educator or the plan); None while none is."""
         return self.condition_buttons.value
 
     def check_blocked(self) -> None:
@@ -568,8 +671,10 @@ class PickPlaceExperiment(StartForm):
             raise InvalidParameterError(self._condition_problem)
 
     def check_ready(self, name: str) -> None:
-        check_choice(self.condition, "the condition", tuple(self.condition_buttons.options))
         if self.class_plan is None:
+            if self.condition is None:
+                raise InvalidParameterError(NO_CONDITION)
+            check_choice(self.condition, "the condition", tuple(self.condition_buttons.options))
             return
         self.assignment = self.class_plan.assign(name)
         condition = self.assignment.condition
@@ -585,13 +690,33 @@ class PickPlaceExperiment(StartForm):
         self.condition_buttons.value = condition
 
     def started_conditions(self, name: str) -> list[str]:
-        """The conditions in which ``name``'s folder holds counted (not practice) runs."""
-        folder = sessions_root() / trainee_key(name)
-        return [
-            c
-            for c in ALL_CONDITIONS
-            if any((folder / run_file_name(2, c, k)).is_file() for k in range(1, RUNS + 1))
-        ]
+        """The conditions in which ``name``'s folder holds counted (not practice) runs, in
+        the order of :data:`ALL_CONDITIONS`."""
+        found = counted_runs(name, self.experiment)
+        return [c for c in ALL_CONDITIONS if c in found]
+
+    def warning(self, name: str) -> str | None:
+        """Counted runs of ``name`` in another condition than the one chosen: the class
+        analysis counts one condition per trainee, so the trainee must confirm."""
+        found = counted_runs(name, self.experiment)
+        others = [c for c in ALL_CONDITIONS if c in found and c != self.condition]
+        if not others:
+            return None
+        held = " and ".join(f"{c} ({_runs_said(*found[c])})" for c in others)
+        how = "" if self.condition_buttons.disabled else f"; else choose {others[0]}"
+        return (
+            f"{name} already has runs in {held}; the class analysis counts one condition "
+            f"per trainee. Start {self.condition} anyway? If so, press Start anyway (or "
+            f"Start again){how}."
+        )
+
+    def autoplay(self, name: str = HEADLESS_TRAINEE) -> None:
+        """Headless runs only: as :meth:`StartForm.autoplay`, in
+        :data:`HEADLESS_CONDITION` when nobody chose a condition."""
+        if headless() and self.trainee is None and self.condition is None:
+            if self.class_plan is None and not self.condition_buttons.disabled:
+                self.condition_buttons.value = HEADLESS_CONDITION
+        super().autoplay(name)
 
     def start(self) -> None:
         if self.trainee is not None:
@@ -659,6 +784,14 @@ class PickPlaceExperiment(StartForm):
         if not self.finished:
             return _not_yet(self)
         return compare_runs(self.tutors)
+
+
+def _runs_said(runs: int, finished: int) -> str:
+    """E.g. "2 finished", "1 begun" or "2 finished, 1 begun"."""
+    parts = [f"{finished} finished"] if finished else []
+    if runs > finished:
+        parts.append(f"{runs - finished} begun")
+    return ", ".join(parts)
 
 
 def _not_yet(form: StartForm) -> str:
