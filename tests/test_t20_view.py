@@ -224,3 +224,13 @@ def test_three_notebook_viewers_keep_their_own_scene(task):
     assert [len(box) for box in sent] == [counts[0] + 1, counts[1], counts[2]]
     (replayed,) = _frames(sent[0][-1][1][0])
     assert replayed == _animation(held[0])
+
+
+def test_both_3d_pages_carry_the_wheel_rule():
+    """The wheel's focus rule (scene3d_wheel.js) is in the notebook viewer's page and in
+    the live server's page; the browser test checks what it does."""
+    from tutor.views.scene_page import live_page, page
+
+    for text in (live_page(), page("t", "", "", "")):
+        assert "{{wheel}}" not in text
+        assert "Click to zoom with the wheel" in text and "stopPropagation" in text

@@ -624,7 +624,8 @@ class Scene3D:
             parts.append(f"<div><b>Animated:</b> {html.escape(self.animation.label)}</div>")
         how = (
             "The attempt plays once by itself after each step; <b>Replay</b> plays it again. "
-            "Drag to turn, scroll to zoom, right-drag to move."
+            "Drag to turn, right-drag to move; click the view, then scroll to zoom "
+            "(Escape gives the wheel back to the page)."
         )
         if self.mode == "live" and self.recorder.web_url:
             url = html.escape(live_page_url(self.recorder.web_url, self.scene_id))
