@@ -490,11 +490,15 @@ def test_live_scene_streams_to_the_loopback_server(task):
     assert scene.mode == "live"
     url = scene.recorder.web_url
     assert url == get_server().web_url and url.startswith(f"http://{LOOPBACK}:")
-    page = url.replace("/static/", "/lfd/")  # the tutor's page: meshcat's, with the stamp
+    # the tutor's page of this scene: meshcat's, with the stamp
+    page = url.replace("/static/", f"/lfd/{scene.scene_id}/")
     assert f"src='{page}'" in scene.widget.children[1].value
     with urllib.request.urlopen(page, timeout=10) as reply:
         assert b"lfd-stamp" in reply.read()
-    served = visualizer().static_html()  # the server's own snapshot of its scene tree
+    # the server's own snapshot of this scene's tree
+    socket = scene.recorder.live.zmq_socket
+    socket.send_multipart([b"get_scene", scene.scene_id.encode()])
+    served = socket.recv().decode()
     paths = {c.get("path") for c in _server_commands(served)}
     assert "/meshcat/lfd/plants/0/ball" in paths and "/meshcat/lfd/table" in paths
 

@@ -3,9 +3,9 @@
 Every Meshcat command of the 3-D view goes through a :class:`SceneRecorder`, which
 keeps the scene tree the way meshcat's server does (an object, its properties, a
 transform and an animation per path), so the scene can be rebuilt without a server:
-as a static page, in the notebook viewer, or in a live viewer that another scene
-drew over. It forwards each command to the live server when there is one and tells
-its listeners (the notebook viewer).
+as a static page or in the notebook viewer. It forwards each command to the live
+server when there is one (to its own scene there, named by ``scene_id``) and tells its
+listeners (the notebook viewer).
 
 A command is ``(kind, path, packed)``: meshcat's command type ("set_object",
 "set_transform", "set_property", "set_animation", "delete"), the scene path and the
@@ -19,6 +19,7 @@ import struct
 from functools import lru_cache
 
 from ..errors import InvalidParameterError
+from .scene_page import SCENE_ID
 
 __all__ = ["SceneRecorder", "delete_command", "empty_animation", "frame_commands"]
 
@@ -63,11 +64,22 @@ class SceneRecorder:
     ----------
     live : meshcat ViewerWindow, optional
         Forward each command to it too (its zmq socket should have a receive timeout).
+    scene_id : str, optional
+        The scene on the tutor's live server that the commands go to
+        (:mod:`tutor.views.meshcat_server`; 1 to 64 of 0-9 and a-z). None: meshcat's
+        own scene, which every page of meshcat's shows.
     """
 
-    def __init__(self, live=None):
+    def __init__(self, live=None, scene_id: str | None = None):
+        if scene_id is not None and not (
+            isinstance(scene_id, str) and SCENE_ID.fullmatch(scene_id)
+        ):
+            raise InvalidParameterError(
+                f"a scene id is 1 to 64 of the characters 0-9 and a-z, got {scene_id!r}"
+            )
         self.tree = _Node()
         self.live = live
+        self.scene_id = scene_id
         #: callables ``f(kind, path, packed)`` told of every command (the notebook viewer)
         self.listeners: list = []
         self.web_url = getattr(live, "web_url", None)
@@ -117,8 +129,11 @@ class SceneRecorder:
         live = self.live
         if live is None:
             return
+        frames = [kind.encode(), path.encode(), packed]
+        if self.scene_id is not None:
+            frames.append(self.scene_id.encode())
         try:
-            live.zmq_socket.send_multipart([kind.encode(), path.encode(), packed])
+            live.zmq_socket.send_multipart(frames)
             live.zmq_socket.recv()
         except Exception as exc:  # zmq.Again (timeout) or a closed socket
             self.live = None
@@ -150,19 +165,6 @@ class SceneRecorder:
         from .scene_page import page, scene_data
 
         return page("MeshCat", scene_data([frame_commands(self.commands())]), "", "")
-
-    def replay_to_live(self, clear: str | None = None) -> None:
-        """Send the whole recorded scene to the live viewer (after ``delete clear``)."""
-        if self.live is None:
-            return
-        if clear is not None:
-            self.forward("delete", clear, delete_command(clear))
-        has_animation = False
-        for kind, path, packed in self.commands():
-            self.forward(kind, path, packed)
-            has_animation |= kind == "set_animation"
-        if not has_animation:
-            self.forward("set_animation", "", empty_animation())
 
 
 @lru_cache(maxsize=1)

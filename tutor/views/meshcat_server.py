@@ -8,10 +8,18 @@ running. This module fixes both without patching meshcat:
 
 - :class:`LoopbackBridge` subclasses ``meshcat.servers.zmqserver.ZMQWebSocketBridge``
   so that its web server binds 127.0.0.1 and its ZeroMQ socket ``tcp://127.0.0.1``.
-  Besides meshcat's page (``/static/``) it serves the tutor's (``/lfd/``,
-  ``static/scene3d_live.html``): the same viewer, which also records when each update
-  of the tutor was applied (the browser tests read it). Its websocket sends each
-  command at once (TCP_NODELAY; tornado's default delayed small ones by ~200 ms).
+  Besides meshcat's page (``/static/``) it serves the tutor's (``static/scene3d_live.html``):
+  the same viewer, which also records when each update of the tutor was applied (the
+  browser tests read it). Its websocket sends each command at once (TCP_NODELAY;
+  tornado's default delayed small ones by ~200 ms).
+- One server holds many scenes. meshcat's server has one scene tree, shown by every
+  page that connects, so the three runs of a notebook drew over each other. Each
+  :class:`~tutor.views.scene3d.Scene3D` names its own scene (an id, see
+  :data:`~tutor.views.scene_page.SCENE_ID`): its commands carry the id as a fourth
+  ZeroMQ frame, and its page ``/lfd/<id>/`` connects to the websocket
+  ``/lfd-ws/<id>``, which sends that scene's tree and its changes only. Commands of
+  three frames (meshcat's own) go to meshcat's scene, shown at ``/static/``. Large
+  objects equal in two scenes (the robot's meshes, ~10 MB) are held once.
 - ``python -m tutor.views.meshcat_server --parent-pid PID`` runs it and prints
   ``zmq_url=...`` and ``web_url=...`` like meshcat does. A tornado ``PeriodicCallback``
   checks twice a second that the parent process (the kernel) still lives and stops
@@ -30,6 +38,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import hashlib
 import importlib.util
 import io
 import os
@@ -44,7 +53,7 @@ from pathlib import Path
 from urllib.parse import urlparse
 
 from ..errors import InvalidParameterError, TutorError
-from .scene_page import LIVE_PAGE
+from .scene_page import LIVE_PAGE, LIVE_SOCKET, SCENE_ID
 
 __all__ = [
     "LOOPBACK",
@@ -60,6 +69,10 @@ __all__ = [
 LOOPBACK = "127.0.0.1"
 #: How often (s) the server checks that its parent process is alive.
 PARENT_POLL_SECONDS = 0.5
+#: meshcat's scene commands (a fourth frame names the tutor's scene they go to)
+_SCENE_COMMANDS = ("set_transform", "set_object", "delete", "set_property", "set_animation")
+#: Objects at least this large (bytes) that two scenes hold alike are kept once.
+_SHARED_BYTES = 16_384
 
 
 class MeshcatServerError(TutorError, RuntimeError):
@@ -97,14 +110,69 @@ def _bridge_class():
         def __init__(self, zmq_url=None, port=None):
             if zmq_url is not None:
                 _loopback_url(zmq_url)
+            self.scenes: dict[str, _Scene] = {}  # the tutor's scenes by id
+            self._shared: dict[bytes, bytes] = {}  # large objects by digest, held once
             super().__init__(zmq_url=zmq_url, host=LOOPBACK, port=port)
+
+        def scene(self, sid: str) -> _Scene:
+            """The tutor's scene ``sid`` (a new, empty one the first time)."""
+            if sid not in self.scenes:
+                self.scenes[sid] = _Scene()
+            return self.scenes[sid]
+
+        def handle_zmq(self, frames):
+            # [kind, path, packed, scene id]: a command to one of the tutor's scenes;
+            # [get_scene, scene id]: that scene as meshcat's self-contained page
+            cmd = frames[0].decode("utf-8", "replace")
+            sid = frames[-1].decode("utf-8", "replace") if len(frames) > 1 else ""
+            if cmd in _SCENE_COMMANDS and len(frames) == 4 and SCENE_ID.fullmatch(sid):
+                self._scene_command(self.scene(sid), cmd, frames[1], frames[2])
+                self.zmq_socket.send(b"ok")
+            elif cmd == "get_scene" and len(frames) == 2 and SCENE_ID.fullmatch(sid):
+                tree, self.tree = self.tree, self.scene(sid).tree
+                try:  # meshcat's page of the tree, built by meshcat
+                    super().handle_zmq(frames[:1])
+                finally:
+                    self.tree = tree
+            elif cmd in _SCENE_COMMANDS and len(frames) == 4:
+                self.zmq_socket.send(b"error: a scene id is 1 to 64 of 0-9 and a-z")
+            else:
+                super().handle_zmq(frames)
+
+        def _scene_command(self, scene, cmd, path_frame, data) -> None:
+            """Apply one command to ``scene`` and send it to the pages showing it, as
+            meshcat's server does with its one tree."""
+            from meshcat.servers.tree import SceneTree, find_node
+
+            path = [p for p in path_frame.decode("utf-8", "replace").split("/") if p]
+            if cmd == "set_object" and len(data) >= _SHARED_BYTES:
+                data = self._shared.setdefault(hashlib.blake2b(data).digest(), data)
+            node = find_node(scene.tree, path)
+            if not (cmd == "set_object" and node.object == data):  # the same object: cached
+                for socket in scene.sockets:
+                    socket.write_message(data, binary=True)
+            if cmd == "set_transform":
+                node.transform = data
+            elif cmd == "set_object":
+                node.object = data
+                node.properties = []
+            elif cmd == "set_property":
+                node.properties.append(data)
+            elif cmd == "set_animation":
+                node.animation = data
+            elif path:  # delete
+                parent = find_node(scene.tree, path[:-1])
+                parent.pop(path[-1], None)
+            else:
+                scene.tree = SceneTree()
 
         def make_app(self):
             import tornado.web
             from meshcat.servers import zmqserver as mz
 
-            # meshcat's two routes, with a websocket that sends each command at once,
-            # and the tutor's own viewer page (meshcat's, plus the "update applied" stamp)
+            # meshcat's two routes, with a websocket that sends each command at once, and
+            # the tutor's: a scene's viewer page (meshcat's, plus the "update applied"
+            # stamp) and its websocket
             app = tornado.web.Application(
                 [
                     (
@@ -113,7 +181,8 @@ def _bridge_class():
                         {"path": mz.VIEWER_ROOT, "default_filename": mz.VIEWER_HTML},
                     ),
                     (r"/", _no_delay_websocket(), {"bridge": self}),
-                    (LIVE_PAGE, _live_page_handler()),
+                    (f"{LIVE_PAGE}({SCENE_ID.pattern})/", _live_page_handler()),
+                    (f"{LIVE_SOCKET}({SCENE_ID.pattern})", _scene_websocket(), {"bridge": self}),
                 ]
             )
             listen = app.listen
@@ -145,17 +214,62 @@ def _no_delay_websocket():
     return NoDelayWebSocket
 
 
+class _Scene:
+    """One of the tutor's scenes on the server: its tree, as meshcat's server keeps its
+    one tree, and the websockets of the pages that show it."""
+
+    def __init__(self):
+        from meshcat.servers.tree import SceneTree
+
+        self.tree = SceneTree()
+        self.sockets: set = set()
+
+    def blobs(self):
+        """The scene as meshcat's server sends it to a page that connects."""
+        from meshcat.servers.tree import walk
+
+        for node in walk(self.tree):
+            if node.object is not None:
+                yield node.object
+            yield from node.properties
+            if node.transform is not None:
+                yield node.transform
+            if node.animation is not None:
+                yield node.animation
+
+
+def _scene_websocket():
+    """The websocket of one of the tutor's scenes (``/lfd-ws/<id>``): that scene's tree
+    when a page connects, then its changes (each sent at once, as above)."""
+    base = _no_delay_websocket()
+
+    class SceneWebSocket(base):
+        def open(self, sid):
+            self.set_nodelay(True)
+            self.lfd_scene = self.bridge.scene(sid)
+            self.lfd_scene.sockets.add(self)
+            for blob in self.lfd_scene.blobs():
+                self.write_message(blob, binary=True)
+
+        def on_close(self):
+            scene = getattr(self, "lfd_scene", None)
+            if scene is not None:
+                scene.sockets.discard(self)
+
+    return SceneWebSocket
+
+
 def _live_page_handler():
     """The tornado handler of the tutor's live viewer page (``static/scene3d_live.html``)."""
     import tornado.web
 
-    from .scene_page import static_text
+    from .scene_page import live_page
 
     class LivePage(tornado.web.RequestHandler):
-        def get(self):
+        def get(self, _sid):  # the page finds its scene id in its own address
             self.set_header("Content-Type", "text/html; charset=utf-8")
             self.set_header("Cache-Control", "no-store")
-            self.write(static_text("scene3d_live.html"))
+            self.write(live_page())
 
     return LivePage
 

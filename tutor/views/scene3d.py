@@ -25,8 +25,9 @@ Two ways to show it
 -------------------
 ``mode="live"``
     A Meshcat viewer in an iframe served by the kernel's loopback-only server
-    (:mod:`tutor.views.meshcat_server`). Updates stream in; it works only when the
-    browser runs on the same machine as the kernel.
+    (:mod:`tutor.views.meshcat_server`), at the address of this scene's own scene on
+    it (``/lfd/<scene_id>/``). Updates stream in; it works only when the browser runs
+    on the same machine as the kernel.
 ``mode="static"``
     No server. In the notebook, meshcat's viewer runs in an iframe inside a widget
     and gets the scene over the widget's comm: all of it when a browser opens the
@@ -45,8 +46,10 @@ Every Meshcat command goes through a :class:`SceneRecorder`
 (:mod:`tutor.views.meshcat_recorder`), which keeps the scene tree the way meshcat's
 server does (so the static page needs no server), forwards the commands to the live
 server when there is one and tells its listeners (the notebook viewer). Several
-:class:`Scene3D` in one kernel share that server: the live viewer shows the one
-updated last. Drawing methods change the scene at once; the
+:class:`Scene3D` in one kernel (the three runs of a notebook) share that server, each
+with a scene of its own (:attr:`Scene3D.scene_id`): a finished run's view keeps its
+picture and its Replay when the next run draws. Drawing methods change the scene at
+once; the
 notebook viewer receives the changes at :meth:`Scene3D.refresh` (which
 :meth:`Scene3D.update` calls).
 
@@ -70,7 +73,7 @@ from __future__ import annotations
 
 import hashlib
 import html
-import threading
+import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -78,7 +81,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, InvalidPayloadError
 from ..fileio import atomic_write_text
-from .meshcat_recorder import SceneRecorder, delete_command, empty_animation, frame_commands
+from .meshcat_recorder import SceneRecorder, empty_animation, frame_commands
 from .payloads import check_view_message
 from .scene_animation import (
     Track,
@@ -117,7 +120,6 @@ STATUS_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
 #: (:meth:`Scene3D.scene_centre`). Meshcat's camera orbits the viewer's origin, so the
 #: whole scene is shifted to put its middle there.
 CAMERA_POSITION = (0.75, -0.7, 0.62)
-DYNAMIC = "/meshcat/lfd"  # everything one Scene3D draws itself (the robot is shared)
 #: The path of the live viewer's "update applied" stamp (its page handles it; not drawn).
 STAMP = "/lfd-stamp"
 
@@ -173,6 +175,12 @@ class Scene3D:
     live_timeout : float
         Seconds to wait for the live server's reply before showing the scene in the
         notebook instead.
+
+    Attributes
+    ----------
+    scene_id : str
+        This scene's name on the live server (32 hex digits, new for each Scene3D):
+        its page there is ``/lfd/<scene_id>/`` and shows this scene only.
     """
 
     def __init__(
@@ -211,7 +219,8 @@ class Scene3D:
                 self.mode = "static"
                 last = (str(exc).strip().splitlines() or [type(exc).__name__])[-1]
                 self.message = f"No live 3-D viewer ({last}): showing the scene in the notebook."
-        self.recorder = SceneRecorder(live)
+        self.scene_id = uuid.uuid4().hex
+        self.recorder = SceneRecorder(live, scene_id=self.scene_id)
         import meshcat
 
         self.vis = meshcat.Visualizer(window=self.recorder)
@@ -225,8 +234,7 @@ class Scene3D:
         self._trails: dict[str, list[bytes]] = {}  # what each trail group shows (digests)
         self._stamp = 0  # updates sent to the live viewer (it reports the last applied)
         self.replay_button = None
-        self._claim_live(fresh=True)  # what follows streams to the live viewer as drawn
-        self._draw_static_scene()
+        self._draw_static_scene()  # streams to this scene on the live server as drawn
         self.set_status(np.full(len(task.conditions), "unknown", dtype=object))
         self._check_live()
 
@@ -478,7 +486,7 @@ class Scene3D:
         else:
             self.clear_animation()
         self._shown_key = key
-        self._claim_live()
+        self._check_live()
         self.refresh()
         self._stamp_live()
 
@@ -514,26 +522,6 @@ class Scene3D:
         return failing[0] if failing else int(shown[0])
 
     # ------------------------------------------------------------------ output
-
-    def _claim_live(self, fresh: bool = False) -> None:
-        """Make the shared live viewer show this scene (another Scene3D may have it).
-
-        ``fresh``: nothing is drawn yet; only clear what another scene left.
-        """
-        global _LIVE_OWNER
-        rec = self.recorder
-        if rec.live is None:
-            self._check_live()
-            return
-        with _LIVE_LOCK:
-            if fresh:
-                rec.forward("delete", DYNAMIC, delete_command(DYNAMIC))
-                rec.forward("set_animation", "", empty_animation())
-                _LIVE_OWNER = self
-            elif _LIVE_OWNER is not self:
-                rec.replay_to_live(clear=DYNAMIC)
-                _LIVE_OWNER = self
-        self._check_live()
 
     def _check_live(self) -> None:
         if self.mode == "live" and self.recorder.live is None:
@@ -599,7 +587,7 @@ class Scene3D:
         import ipywidgets as w
 
         if self.mode == "live":
-            url = html.escape(live_page_url(self.recorder.web_url or ""))
+            url = html.escape(live_page_url(self.recorder.web_url or "", self.scene_id))
             style = f"width:100%;height:{self.height}px;border:1px solid #ccc"
             return w.HTML(f"<iframe src='{url}' style='{style}'></iframe>")
         view = viewer_widget_class()(height=self.height, page=page("3-D view", "", "", ""))
@@ -636,10 +624,11 @@ class Scene3D:
             parts.append(f"<div><b>Animated:</b> {html.escape(self.animation.label)}</div>")
         how = (
             "The attempt plays once by itself after each step; <b>Replay</b> plays it again. "
-            "Drag to turn, scroll to zoom, right-drag to move."
+            "Drag to turn, right-drag to move; click the view, then scroll to zoom "
+            "(Escape gives the wheel back to the page)."
         )
         if self.mode == "live" and self.recorder.web_url:
-            url = html.escape(live_page_url(self.recorder.web_url))
+            url = html.escape(live_page_url(self.recorder.web_url, self.scene_id))
             how += f" <a href='{url}' target='_blank'>Open in its own tab</a>."
         parts.append(f"<div style='font-size:12px;color:#555'>{how}</div>")
         if self.message:
@@ -692,7 +681,3 @@ def _tests_after(run, n_demos: int | None = None) -> list:
     records, read from the typed run record."""
     tests = run.attempt.tests
     return list(tests) if n_demos is None else [t for t in tests if t.after_demo == n_demos]
-
-
-_LIVE_OWNER: Scene3D | None = None
-_LIVE_LOCK = threading.Lock()

@@ -8,7 +8,9 @@ and feeds it the scene over the widget's comm.
 
 The HTML, the page's script and the widget's script are static files in
 ``tutor/views/static/`` (``scene3d_page.html``, ``scene3d_page.js``,
-``scene3d_view.js``), read with :mod:`importlib.resources`. meshcat's own viewer
+``scene3d_view.js``; ``scene3d_live.html`` for the live server's page, and
+``scene3d_wheel.js`` in both pages: the wheel scrolls the page until the view is
+clicked), read with :mod:`importlib.resources`. meshcat's own viewer
 script comes from the installed meshcat package (it works offline).
 """
 
@@ -28,7 +30,10 @@ from ..runtime import headless
 
 __all__ = [
     "LIVE_PAGE",
+    "LIVE_SOCKET",
+    "SCENE_ID",
     "choose_mode",
+    "live_page",
     "live_page_url",
     "page",
     "scene_data",
@@ -36,9 +41,14 @@ __all__ = [
     "viewer_widget_class",
 ]
 
-#: Where the tutor's Meshcat server serves its own viewer page (``scene3d_live.html``:
-#: meshcat's viewer, plus the "update applied" stamp), next to meshcat's ``/static/``.
+#: Where the tutor's Meshcat server serves the viewer page of each scene,
+#: ``/lfd/<scene id>/`` (``scene3d_live.html``: meshcat's viewer, plus the "update
+#: applied" stamp), next to meshcat's ``/static/``.
 LIVE_PAGE = "/lfd/"
+#: The websocket of each scene on that server, ``/lfd-ws/<scene id>``.
+LIVE_SOCKET = "/lfd-ws/"
+#: What a scene id may be (the tutor's are 32 hex digits): it is part of the page's address.
+SCENE_ID = re.compile(r"[0-9a-z]{1,64}")
 
 _SLOT = re.compile(r"\{\{(\w+)\}\}")
 
@@ -61,13 +71,20 @@ def choose_mode(mode: str = "auto") -> str:
     return "static" if headless() or remote else "live"
 
 
-def live_page_url(web_url: str) -> str:
-    """The tutor's live viewer page on the server whose meshcat page is ``web_url``
-    ("http://127.0.0.1:7000/static/" -> "http://127.0.0.1:7000/lfd/"); "" stays ""."""
+def live_page_url(web_url: str, scene_id: str) -> str:
+    """The live viewer page of scene ``scene_id`` on the server whose meshcat page is
+    ``web_url`` ("http://127.0.0.1:7000/static/", "ab12" ->
+    "http://127.0.0.1:7000/lfd/ab12/"); "" stays ""."""
     if not web_url:
         return ""
     parsed = urlparse(web_url)
-    return parsed._replace(path=LIVE_PAGE, query="", fragment="").geturl()
+    return parsed._replace(path=f"{LIVE_PAGE}{scene_id}/", query="", fragment="").geturl()
+
+
+def live_page() -> str:
+    """The live viewer page (``scene3d_live.html`` with the wheel's script in it); the
+    page reads its scene id from its own address."""
+    return static_text("scene3d_live.html").replace("{{wheel}}", static_text("scene3d_wheel.js"))
 
 
 @lru_cache(maxsize=8)
@@ -116,7 +133,7 @@ def page(title: str, data: str, legend: str, caption: str) -> str:
         "overlay": overlay,
         "data": data,
         "viewer": _viewer_js(),
-        "script": static_text("scene3d_page.js"),
+        "script": static_text("scene3d_wheel.js") + static_text("scene3d_page.js"),
     }
     # one pass over the template: the data inserted is never searched for slots
     return _SLOT.sub(lambda m: slots[m[1]], static_text("scene3d_page.html"))
