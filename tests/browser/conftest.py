@@ -77,6 +77,16 @@ def start_notebook_kernel(url: str, token: str, path: str) -> str:
         return json.loads(reply.read())["kernel"]["id"]
 
 
+def session_kernel(url: str, token: str, path: str) -> str:
+    """The kernel id notebook ``path``'s session has now (JupyterLab may have replaced the
+    kernel :func:`start_notebook_kernel` started, e.g. after a "Select Kernel" question)."""
+    with urllib.request.urlopen(f"{url}/api/sessions?token={token}", timeout=60) as reply:
+        sessions = json.loads(reply.read())
+    kernels = [s["kernel"]["id"] for s in sessions if s.get("path") == path and s.get("kernel")]
+    assert kernels, f"no session of {path} is running"
+    return kernels[-1]
+
+
 def stop(proc: subprocess.Popen) -> None:
     if proc.poll() is None:
         proc.send_signal(signal.SIGTERM)

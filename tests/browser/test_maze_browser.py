@@ -21,7 +21,7 @@ import urllib.request
 import numpy as np
 import pytest
 
-from tests.browser.conftest import ARTIFACTS, start_notebook_kernel
+from tests.browser.conftest import ARTIFACTS, session_kernel, start_notebook_kernel
 from tutor.tasks.maze import load_layout
 
 pytestmark = pytest.mark.browser
@@ -329,10 +329,11 @@ def test_jupyterlab_dead_kernel_says_so(page, jupyterlab, artifacts):
     # create_subshell_request), refused with "Canceled future for ... before replies were
     # done": seen now and then, depending on what JupyterLab had in flight
     page.allowed_page_errors = ("Canceled future for",)
-    kernel = open_notebook(page, url, token, artifacts, "dead_kernel")
+    open_notebook(page, url, token, artifacts, "dead_kernel")
     tutor, pad = sketchpad_for(page, "VF")
     pad.locator("xpath=self::*[@data-render-id]").wait_for(timeout=30_000)
     before = n_demos(pad)
+    kernel = session_kernel(url, token, "02_maze_experiment.ipynb")  # the one running now
     request = urllib.request.Request(f"{url}/api/kernels/{kernel}?token={token}", method="DELETE")
     urllib.request.urlopen(request, timeout=60).close()
     deadline = time.monotonic() + 60
