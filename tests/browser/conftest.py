@@ -56,14 +56,24 @@ def wait_http(url: str, proc: subprocess.Popen, timeout: float = 90.0) -> None:
     raise TimeoutError(f"{url} did not answer within {timeout} s")
 
 
-def start_notebook_kernel(url: str, token: str, path: str) -> str:
+def start_notebook_kernel(url: str, token: str, path: str, fresh: bool = False) -> str:
     """Start the kernel session of notebook ``path`` through the server's REST API.
 
     JupyterLab then attaches to this session when the notebook opens. Left to itself,
     opening a notebook can start two kernels at once and shut one down; cells run
     straight after may go to the one shut down and never execute. Returns the kernel id
-    (the page's own execution indicator says when it is idle).
+    (the page's own execution indicator says when it is idle). With ``fresh``, a session
+    of ``path`` an earlier test left is shut down first, so the notebook runs in a new
+    kernel.
     """
+    if fresh:  # the server would hand back a session an earlier test left running
+        with urllib.request.urlopen(f"{url}/api/sessions?token={token}", timeout=60) as r:
+            earlier = [x["id"] for x in json.loads(r.read()) if x.get("path") == path]
+        for session in earlier:
+            gone = urllib.request.Request(
+                f"{url}/api/sessions/{session}?token={token}", method="DELETE"
+            )
+            urllib.request.urlopen(gone, timeout=60).close()
     body = json.dumps(
         {"path": path, "type": "notebook", "name": path, "kernel": {"name": "python3"}}
     ).encode()

@@ -163,7 +163,7 @@ def test_three_runs_keep_their_own_view_and_the_wheel_scrolls_the_page(
     page, jupyterlab, artifacts
 ):
     url, token = jupyterlab
-    start_notebook_kernel(url, token, NOTEBOOK)
+    start_notebook_kernel(url, token, NOTEBOOK, fresh=True)  # not the last test's kernel
     page.goto(f"{url}/lab/tree/{NOTEBOOK}?token={token}")
     page.locator(".jp-Notebook").wait_for(timeout=WIDGET_TIMEOUT_MS)
     page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").wait_for(
