@@ -89,13 +89,19 @@ def test_a_name_the_plan_cannot_take_leaves_no_condition(plan):
 # ------------------------------------------------------------------ another condition
 
 
-def test_counted_runs_reads_the_run_records(person):
-    begin("BF", finish=True)
+def start_practice(condition: str, name: str):
+    """A new form whose practice run of ``condition`` ``name`` has started."""
     practice = form()
-    practice.condition_buttons.value = "SF"
-    practice.name.value = "Ana"
+    practice.condition_buttons.value = condition
+    practice.name.value = name
     practice.practice.value = True
     practice.go.click()
+    return practice
+
+
+def test_counted_runs_reads_the_run_records(person):
+    begin("BF", finish=True)
+    practice = start_practice("SF", "Ana")
     practice.tutors[0].buttons["Demonstrate"].click()  # a practice run is not counted
     assert counted_runs("Ana") == {"BF": (1, 1)}
     assert counted_runs("Ana", experiment=1) == {}
@@ -149,11 +155,7 @@ def test_the_same_condition_resumes_without_a_warning(person):
 
 def test_practice_and_other_trainees_get_no_warning(person):
     begin("BF", finish=True)
-    practice = form()
-    practice.condition_buttons.value = "SF"
-    practice.name.value = "Ana"
-    practice.practice.value = True
-    practice.go.click()
+    practice = start_practice("SF", "Ana")
     assert practice.trainee == "Ana" and practice.problem is None
     other = form()
     other.condition_buttons.value = "SF"

@@ -10,15 +10,14 @@ from __future__ import annotations
 
 import asyncio
 import base64
-import gzip
 import re
-import struct
 import urllib.error
 import urllib.request
 
 import numpy as np
 import pytest
 
+from tests.test_scene3d import _frames  # the notebook viewer's recorded frames
 from tutor.errors import InvalidParameterError
 from tutor.tasks.pickplace import PickPlaceTask
 from tutor.views.meshcat_recorder import SceneRecorder
@@ -177,17 +176,6 @@ def test_meshcat_own_scene_and_bad_scene_ids(task):
     for bad in ("", "A" * 3, "a" * 65, 7, "a/b"):
         with pytest.raises(InvalidParameterError, match="scene id"):
             SceneRecorder(scene_id=bad)
-
-
-def _frames(gz: bytes) -> list[dict]:
-    import umsgpack
-
-    raw, out, i = gzip.decompress(gz), [], 0
-    while i < len(raw):
-        (n,) = struct.unpack(">I", raw[i : i + 4])
-        out.append(umsgpack.unpackb(raw[i + 4 : i + 4 + n]))
-        i += 4 + n
-    return out
 
 
 def test_three_notebook_viewers_keep_their_own_scene(task):

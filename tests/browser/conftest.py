@@ -87,6 +87,18 @@ def start_notebook_kernel(url: str, token: str, path: str, fresh: bool = False) 
         return json.loads(reply.read())["kernel"]["id"]
 
 
+def open_and_run_all(page, url: str, token: str, path: str, timeout_ms: float) -> None:
+    """Open notebook ``path`` in JupyterLab, wait until its kernel is idle, and run all its
+    cells from the Run menu with the mouse."""
+    page.goto(f"{url}/lab/tree/{path}?token={token}")
+    page.locator(".jp-Notebook").wait_for(timeout=timeout_ms)
+    page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").wait_for(
+        timeout=timeout_ms
+    )
+    page.get_by_role("menuitem", name="Run", exact=True).click()
+    page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
+
+
 def session_kernel(url: str, token: str, path: str) -> str:
     """The kernel id notebook ``path``'s session has now (JupyterLab may have replaced the
     kernel :func:`start_notebook_kernel` started, e.g. after a "Select Kernel" question)."""

@@ -25,7 +25,7 @@ import time
 import numpy as np
 import pytest
 
-from tests.browser.conftest import RECORD_CLIPS, start_notebook_kernel, wait_clip
+from tests.browser.conftest import RECORD_CLIPS, open_and_run_all, start_notebook_kernel, wait_clip
 
 pytestmark = pytest.mark.browser
 
@@ -140,13 +140,7 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
     page.on("pageerror", lambda exc: errors.append(str(exc)))
     url, token = jupyterlab
     start_notebook_kernel(url, token, NOTEBOOK)
-    page.goto(f"{url}/lab/tree/{NOTEBOOK}?token={token}")
-    page.locator(".jp-Notebook").wait_for(timeout=WIDGET_TIMEOUT_MS)
-    page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").wait_for(
-        timeout=WIDGET_TIMEOUT_MS
-    )
-    page.get_by_role("menuitem", name="Run", exact=True).click()
-    page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
+    open_and_run_all(page, url, token, NOTEBOOK, WIDGET_TIMEOUT_MS)
     # the start form: choose BF with the mouse, type the name, press Start
     form = page.locator(".lfd-start-form")
     form.wait_for(timeout=WIDGET_TIMEOUT_MS)

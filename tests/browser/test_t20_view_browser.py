@@ -20,7 +20,7 @@ import time
 
 import pytest
 
-from tests.browser.conftest import start_notebook_kernel
+from tests.browser.conftest import open_and_run_all, start_notebook_kernel
 from tests.browser.test_pickplace_browser import WIDGET_TIMEOUT_MS, _n_demos, _tutor
 
 pytestmark = pytest.mark.browser
@@ -164,13 +164,7 @@ def test_three_runs_keep_their_own_view_and_the_wheel_scrolls_the_page(
 ):
     url, token = jupyterlab
     start_notebook_kernel(url, token, NOTEBOOK, fresh=True)  # not the last test's kernel
-    page.goto(f"{url}/lab/tree/{NOTEBOOK}?token={token}")
-    page.locator(".jp-Notebook").wait_for(timeout=WIDGET_TIMEOUT_MS)
-    page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").wait_for(
-        timeout=WIDGET_TIMEOUT_MS
-    )
-    page.get_by_role("menuitem", name="Run", exact=True).click()
-    page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
+    open_and_run_all(page, url, token, NOTEBOOK, WIDGET_TIMEOUT_MS)
     form = page.locator(".lfd-start-form")
     form.wait_for(timeout=WIDGET_TIMEOUT_MS)
     form.locator(".lfd-start-condition").get_by_role("button", name="BF", exact=True).click()
