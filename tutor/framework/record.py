@@ -40,7 +40,10 @@ import uuid
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 
+import numpy as np
+
 from ..errors import InvalidFileError, InvalidParameterError
+from ..limits import MAX_RECORDING_SAMPLES
 from ..runtime import default_trainee, normalise_name, safe_text, trainee_key
 
 __all__ = [
@@ -48,6 +51,9 @@ __all__ = [
     "RECORD_VERSION",
     "SUPPORTED_VERSIONS",
     "EVENT_KINDS",
+    "HOW_GIVEN",
+    "check_given",
+    "round_recording",
     "Trainee",
     "CODE_TRAINEE",
     "Demo",
@@ -78,6 +84,35 @@ EVENT_KINDS = (
     "spend",  # clock time besides demos and robot attempts (Experiment 2)
     "finish",  # the trainee ended the run
 )
+#: how a demonstration was given: the trainee's own hand on the arm, the tutor guiding
+#: the arm for them, loaded from a file, drawn (the maze's sketchpad), or a simulated
+#: teacher's; "" is an old record that did not say
+HOW_GIVEN = ("own", "guided", "loaded", "drawn", "simulated")
+#: decimals a stored recording keeps per column: t to 1 ms, x, y, z to 0.1 mm, g to 0.001
+RECORDING_DECIMALS = (3, 4, 4, 4, 3)
+
+
+def check_given(value) -> str:
+    """How a demo was given (one of :data:`HOW_GIVEN`, or "" for unknown), or a named error."""
+    if not isinstance(value, str) or (value and value not in HOW_GIVEN):
+        raise InvalidParameterError(
+            f"how a demonstration was given must be one of {', '.join(map(repr, HOW_GIVEN))}, "
+            f"got {value!r}"
+        )
+    return value
+
+
+def round_recording(recording) -> tuple[tuple[float, ...], ...]:
+    """A raw recording (T, C) as the rows a record stores, each column rounded by
+    :data:`RECORDING_DECIMALS` (columns beyond them keep 4 decimals)."""
+    a = np.asarray(recording, dtype=float)
+    decimals = [
+        RECORDING_DECIMALS[j] if j < len(RECORDING_DECIMALS) else 4 for j in range(a.shape[1])
+    ]
+    rounded = np.column_stack([np.round(a[:, j], d) for j, d in enumerate(decimals)])
+    return tuple(tuple(row) for row in rounded.tolist())
+
+
 #: why an attempt ended
 END_REASONS = ("", "reset", "load", "restore")
 #: events that begin a new attempt (``load`` also happens inside one)
@@ -168,6 +203,15 @@ def _list(value, path: str) -> list:
 
 def _numbers(value, path: str) -> tuple[float, ...]:
     return tuple(_num(v, f"{path}[{i}]") for i, v in enumerate(_list(value, path)))
+
+
+def _table(value, path: str) -> tuple[tuple[float, ...], ...]:
+    """A non-empty table of numbers, the same number of columns in every row."""
+    rows = _list(value, path)
+    table = tuple(_numbers(r, f"{path}[{i}]") for i, r in enumerate(rows))
+    if not table or len({len(r) for r in table}) != 1 or not table[0]:
+        _fail(path, "must be a table of numbers with the same columns in each row")
+    return table
 
 
 def _indices(value, path: str) -> tuple[int, ...]:
@@ -341,6 +385,13 @@ class Demo:
     mistake : str
         A mistake made on purpose or by a simulated hand ("wrong_plant", "sloppy_grab",
         "slip"); "" for none.
+    given : str
+        How it was given (:data:`HOW_GIVEN`): "own" (the trainee's hand guided the arm),
+        "guided" (the tutor guided the arm for them), "loaded", "drawn" or "simulated";
+        "" in records written before the tutor kept it.
+    recording : tuple of tuple of float or None
+        The raw recording as it came from the hand (an own-hand demo's (T, 5) t, x, y,
+        z, g, rounded by :data:`RECORDING_DECIMALS`); None when there is none.
     """
 
     samples: tuple[tuple[float, ...], ...]
@@ -350,6 +401,8 @@ class Demo:
     followed_rule: bool | None = None
     chosen_by: str = ""
     mistake: str = ""
+    given: str = ""
+    recording: tuple[tuple[float, ...], ...] | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -360,6 +413,8 @@ class Demo:
             "followed_rule": self.followed_rule,
             "chosen_by": self.chosen_by,
             "mistake": self.mistake,
+            "given": self.given,
+            "recording": None if self.recording is None else [list(r) for r in self.recording],
         }
 
     @classmethod
@@ -368,12 +423,28 @@ class Demo:
             data,
             path,
             ("samples",),
-            ("condition", "shown", "seconds", "followed_rule", "chosen_by", "mistake"),
+            (
+                "condition",
+                "shown",
+                "seconds",
+                "followed_rule",
+                "chosen_by",
+                "mistake",
+                "given",
+                "recording",
+            ),
         )
-        rows = _list(d["samples"], f"{path}.samples")
-        samples = tuple(_numbers(r, f"{path}.samples[{i}]") for i, r in enumerate(rows))
-        if not samples or len({len(r) for r in samples}) != 1 or not samples[0]:
-            _fail(f"{path}.samples", "must be a table of numbers with the same columns in each row")
+        samples = _table(d["samples"], f"{path}.samples")
+        recording = d.get("recording")
+        if recording is not None:
+            rows = _list(recording, f"{path}.recording")
+            if len(rows) > MAX_RECORDING_SAMPLES:
+                _fail(
+                    f"{path}.recording",
+                    f"holds {len(rows)} samples, more than the {MAX_RECORDING_SAMPLES} a "
+                    "recording may have",
+                )
+            recording = _table(rows, f"{path}.recording")
         cond = d.get("condition")
         shown = d.get("shown")
         seconds = d.get("seconds")
@@ -386,6 +457,8 @@ class Demo:
             followed_rule=None if rule is None else _bool(rule, f"{path}.followed_rule"),
             chosen_by=_str(d.get("chosen_by", ""), f"{path}.chosen_by"),
             mistake=_str(d.get("mistake", ""), f"{path}.mistake"),
+            given=_str(d.get("given", ""), f"{path}.given", ("", *HOW_GIVEN)),
+            recording=recording,
         )
 
 

@@ -38,7 +38,17 @@ from ..fileio import read_json, write_json
 from ..limits import MAX_DEMOS_PER_RUN
 from .feedback import reveal
 from .metrics import rule_of
-from .record import Attempt, Demo, Event, RunRecord, Test, Trainee, utc_now
+from .record import (
+    Attempt,
+    Demo,
+    Event,
+    RunRecord,
+    Test,
+    Trainee,
+    check_given,
+    round_recording,
+    utc_now,
+)
 from .session import FeedbackRecord, TeachingSession
 from .task import Task
 
@@ -51,6 +61,19 @@ class RunOverError(TutorError, RuntimeError):
 
 def _floats(a) -> tuple[float, ...]:
     return tuple(float(v) for v in np.asarray(a, dtype=float).ravel())
+
+
+def _recording(recording) -> np.ndarray:
+    """A raw recording as a finite float table (T, C), T, C >= 1, or a named error."""
+    try:
+        a = np.asarray(recording, dtype=float)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InvalidParameterError("a recording must be a table of numbers (T, columns)") from exc
+    if a.ndim != 2 or a.size == 0 or not np.isfinite(a).all():
+        raise InvalidParameterError(
+            f"a recording must be a non-empty table of finite numbers, got shape {a.shape}"
+        )
+    return a
 
 
 class TeachingRun:
@@ -301,6 +324,8 @@ class TeachingRun:
         followed_rule: bool | None = None,
         chosen_by: str = "",
         mistake: str = "",
+        given: str = "",
+        recording=None,
     ) -> FeedbackRecord:
         """Add one demonstration; returns the feedback after it.
 
@@ -308,7 +333,10 @@ class TeachingRun:
         None); ``shown`` the conditions asked to see (SF); ``seconds`` its cost on the
         clock; ``followed_rule`` VR's rule compliance or HF's hint following;
         ``chosen_by`` and ``mistake`` notes on why it was given and what went wrong on
-        purpose (simulated teachers, the hand).
+        purpose (simulated teachers, the hand); ``given`` how it was given
+        (:data:`~tutor.framework.record.HOW_GIVEN`, "" for not said) and ``recording``
+        the raw recording to keep with it (a table of numbers, checked by the caller's
+        task; stored rounded, :func:`~tutor.framework.record.round_recording`).
 
         Raises
         ------
@@ -321,6 +349,8 @@ class TeachingRun:
         """
         self._check_open()
         self._check_room(1)
+        given = check_given(given)
+        kept = None if recording is None else round_recording(_recording(recording))
         record = self.session.add_demo(raw, shown=shown, condition=condition)
         if self.feedback == "adaptive":
             shown = record.shown  # the selector's picks, kept so that a replay shows them
@@ -332,6 +362,8 @@ class TeachingRun:
             followed_rule=None if followed_rule is None else bool(followed_rule),
             chosen_by=str(chosen_by),
             mistake=str(mistake or ""),
+            given=given,
+            recording=kept,
         )
         attempt = replace(self.attempt, demos=(*self.attempt.demos, demo))
         self._record = self._record.with_current(attempt, self._event("add", attempt.n_demos))
@@ -341,8 +373,8 @@ class TeachingRun:
         """Add several demos all or nothing (a Load); returns how many were added.
 
         ``items`` are ``(raw, options)`` pairs, ``options`` a dict of :meth:`add_demo`'s
-        keyword arguments. If one is refused, the run is left exactly as it was and the
-        error names the demo.
+        keyword arguments (``given`` is "loaded" unless they say otherwise). If one is
+        refused, the run is left exactly as it was and the error names the demo.
         """
         self._check_open()
         items = list(items)
@@ -353,7 +385,7 @@ class TeachingRun:
         try:
             for i, (raw, options) in enumerate(items, start=1):
                 try:
-                    self.add_demo(raw, **options)
+                    self.add_demo(raw, **{"given": "loaded", **options})
                 except TutorError as exc:
                     where = f"demo {i} of {detail}" if detail else f"demo {i}"
                     raise type(exc)(f"{where}: {exc}") from exc

@@ -46,7 +46,12 @@ class MazeRun(TeachingRun):
         return advise(self.task, self.session)
 
     def add_demo(self, raw, **options) -> FeedbackRecord:
-        """Add a demo; in VR its compliance with the rule in force is recorded."""
+        """Add a demo; in VR its compliance with the rule in force is recorded.
+
+        ``given`` (how it was given) is "drawn" unless the options say otherwise: a
+        maze demo is a stroke drawn on the sketchpad.
+        """
+        options.setdefault("given", "drawn")
         if self.condition == "VR" and options.get("followed_rule") is None:
             rule = self.advice()
             start = self.task.condition_of(self.task.preprocess(raw))

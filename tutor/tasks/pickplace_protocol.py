@@ -46,10 +46,11 @@ import numpy as np
 
 from ..errors import InvalidParameterError, TutorError
 from ..framework import RunOverError, TeachingRun
-from ..framework.record import utc_now
+from ..framework.record import check_given, utc_now
 from .hint import Hint, next_demo_hint
 from .kinesthetic import CARRY_SECONDS, PAUSE_SECONDS, REACH_SECONDS
 from .pickplace import PickPlaceTask
+from .recording import check_recording
 
 __all__ = [
     "ADAPTIVE",
@@ -82,6 +83,25 @@ RUNS = 3
 #: presses, rounded down. Less time than this (plus the condition's attempts) left
 #: ends the run.
 SHORTEST_DEMO_SECONDS = float(int(0.8 * (REACH_SECONDS + CARRY_SECONDS + 2 * PAUSE_SECONDS)))
+
+
+#: the hands whose demo may carry a mistake: the tutor's (asked for in the "mistake"
+#: menu) and a simulated teacher's (a slip, noted)
+MISTAKEN_HANDS = ("guided", "simulated")
+
+
+def _setup_seconds(value) -> float:
+    """Set-up time before a demo as a finite number >= 0, or a named error."""
+    ok = isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
+    try:
+        ok = ok and bool(np.isfinite(float(value)) and float(value) >= 0)
+    except OverflowError:
+        ok = False
+    if not ok:
+        raise InvalidParameterError(
+            f"setup_seconds must be a finite number of seconds >= 0, got {value!r}"
+        )
+    return float(value)
 
 
 def clock(seconds: float) -> str:
@@ -384,8 +404,35 @@ class PickPlaceRun(TeachingRun):
 
     # ---------------------------------------------------------------- teaching
 
-    def demonstrate(self, plant: int, raw=None, mistake=None, rng=None, chosen_by: str = ""):
-        """Give one demonstration to ``plant`` (recorded, or generated kinesthetically).
+    def demonstrate(
+        self,
+        plant: int,
+        raw=None,
+        mistake=None,
+        rng=None,
+        chosen_by: str = "",
+        given: str = "guided",
+        setup_seconds: float = 0.0,
+    ):
+        """Give one demonstration to ``plant``: by the trainee's own hand, or guided.
+
+        ``given`` says how (:data:`~tutor.framework.record.HOW_GIVEN`):
+
+        "guided" (the default)
+            The tutor guides the arm for the trainee: the demo is generated
+            kinesthetically (:meth:`PickPlaceTask.demonstrate`, with ``mistake`` when
+            asked for) unless ``raw`` is given.
+        "own"
+            The trainee's own hand guided the arm: ``raw`` is the recording (T, 5) the
+            page sent, checked by :func:`tutor.tasks.recording.check_recording` and kept
+            with the demo (``Demo.recording``). No ``mistake``: a grab elsewhere is a
+            real demonstration error, judged as such.
+        "simulated", "loaded"
+            ``raw`` from a simulated teacher or a file (``mistake`` notes a simulated
+            hand's slip).
+
+        The demo costs its duration plus ``setup_seconds`` (setting up before it, e.g.
+        choosing the plant and taking the handle) on the clock, as one cost.
 
         In HF it records whether ``plant`` is the hinted one (``Demo.followed_rule``;
         None when no hint could be given); a demo added with :meth:`add_demo` (e.g.
@@ -393,6 +440,11 @@ class PickPlaceRun(TeachingRun):
 
         Raises
         ------
+        InvalidRecordingError
+            An own-hand recording that cannot be a demonstration (nothing changes).
+        InvalidParameterError
+            An unknown plant, ``given``, a ``mistake`` with an own-hand demo, a missing
+            recording, or ``setup_seconds`` not a finite number >= 0.
         RunOverError
             The demonstration (with the attempts the condition shows after it) would not
             end by the cap: it is not started (nothing changes). When not even the
@@ -401,9 +453,29 @@ class PickPlaceRun(TeachingRun):
         """
         self._check_open()
         plant = self._check_plant(plant)
+        given = check_given(given)
+        setup = _setup_seconds(setup_seconds)
+        recording = None
+        if given == "own":
+            if raw is None:
+                raise InvalidParameterError(
+                    "an own-hand demonstration needs its recording: demonstrate(plant, "
+                    'raw=recording, given="own")'
+                )
+            if mistake:
+                raise InvalidParameterError(
+                    "an own-hand demonstration takes no mistake= (the trainee's hand makes "
+                    'its own): mistakes are for given="guided"'
+                )
+            raw = recording = check_recording(raw, self.task.scene)
+        elif mistake and given not in MISTAKEN_HANDS:
+            raise InvalidParameterError(
+                f'mistake= is for the tutor\'s hand (given="guided") or a simulated one, not '
+                f"given={given!r}"
+            )
         if raw is None:
             raw = self.task.demonstrate(plant, rng, mistake=mistake)
-        seconds = self.task.duration(raw)
+        seconds = self.task.duration(raw) + setup
         followed = self._followed_hint(plant) if self.hinted else None
         return self.add_demo(
             raw,
@@ -412,6 +484,8 @@ class PickPlaceRun(TeachingRun):
             followed_rule=followed,
             chosen_by=chosen_by,
             mistake=mistake or "",
+            given=given,
+            recording=recording,
         )
 
     def test(self, plants, after_run: bool | None = None) -> np.ndarray:

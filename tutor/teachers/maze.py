@@ -120,6 +120,7 @@ class MazeTeacher:
                 followed_rule=None if advice is None else followed(advice, start),
                 chosen_by=why,
                 mistake="slip" if slip else "",
+                given="simulated",
             )
             session = run.session
             if first_start is None:

@@ -145,7 +145,11 @@ class PickPlaceTeacher:
             if not run.fits(self.task.duration(raw)):
                 break  # as the paper ran it: a demo that cannot end by 15:00 is not started
             record = run.demonstrate(
-                plant, raw=raw, chosen_by=why, mistake="wrong_plant" if slip else None
+                plant,
+                raw=raw,
+                chosen_by=why,
+                mistake="wrong_plant" if slip else None,
+                given="simulated",
             )
             model.belief.demonstrate(plant)
             model.belief.observe(record.shown, record.passed[record.shown])
