@@ -65,7 +65,8 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
 
 Stable CSS classes for browser tests: ``lfd-start-form`` (the whole form),
 ``lfd-start-name``, ``lfd-start-condition``, ``lfd-start-condition-prompt`` (what it says
-while none is chosen), ``lfd-start-hand`` (the guided-hand checkbox), ``lfd-start-practice``, ``lfd-start-go`` (the Start button),
+while none is chosen), ``lfd-start-hand`` (the guided-hand checkbox),
+``lfd-start-practice``, ``lfd-start-go`` (the Start button),
 ``lfd-start-confirm`` (*Start anyway*, shown only while a warning waits for it),
 ``lfd-start-note`` and ``lfd-start-results``.
 """
@@ -94,7 +95,7 @@ from ..runtime import (
 from ..tasks.maze_run import PHASE_ORDER
 from ..tasks.pickplace_protocol import ALL_CONDITIONS, EXTRA_CONDITIONS, RUNS
 from ..tasks.pickplace_protocol import CONDITIONS as PICKPLACE_CONDITIONS
-from .hand import HANDS, HAND_SOURCES, hand_and_source
+from .hand import HAND_SOURCES, HANDS, hand_and_source
 from .payloads import check_choice, check_text, safely
 from .worked_example import instruction_widget
 
