@@ -65,6 +65,9 @@ class Hand:
     controls : tuple of (str, tuple of str, str)
         The controls, each a gesture in words ("" for none), the keys that do the same
         (none for a gesture alone), and what they do.
+    try_it : str
+        The "Try the controls" step before the first demonstration (the paper's
+        familiarisation), in a few sentences.
     """
 
     code: str
@@ -72,6 +75,7 @@ class Hand:
     words: str
     mistake_menu: bool
     controls: tuple[tuple[str, tuple[str, ...], str], ...]
+    try_it: str
 
     @property
     def how(self) -> str:
@@ -105,6 +109,12 @@ HANDS = {
             ("", ("Escape",), "cancel the demonstration (nothing is kept)"),
             ("a gamepad's sticks", (), "move the hand; its button A closes or opens it"),
         ),
+        try_it=(
+            "Before your first demonstration, take about 5 minutes to try the controls, as "
+            "the paper's trainees did: select any plant, press Guide the arm, move the hand "
+            "with the mouse and with the keys, close and open it, then press Escape. A "
+            "cancelled try is not kept and uses none of your 15 minutes."
+        ),
     ),
     "guided": Hand(
         code="guided",
@@ -118,6 +128,11 @@ HANDS = {
             ("click a plant on the tray map", (), "choose the plant to demonstrate"),
             ("the Mistake menu", (), "optionally, a mistake the hand makes on purpose"),
             ("the Demonstrate button", (), "the tutor guides the arm to the plant and the bin"),
+        ),
+        try_it=(
+            "There is nothing to practise with the hand itself: choose your plants well. "
+            "The Mistake menu shows what a demonstration to the wrong plant or a sloppy "
+            "grab teaches the robot."
         ),
     ),
 }

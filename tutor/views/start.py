@@ -466,10 +466,14 @@ class StartForm:
             for button in tutor.buttons.values():
                 button.on_click(lambda _: self._safely(self._after_click))
             header = w.HTML(f"<h3>{html.escape(step['label'])}</h3>")
-            intro = instruction_widget(self.experiment, step["condition"], self.practice_run)
+            intro = self.instruction(step)
             self.stage.children = (*self.stage.children, header, intro, tutor.widget)
         if self.finished:
             self._show_results()
+
+    def instruction(self, step: dict):
+        """The instruction and worked example shown above the run of ``step``."""
+        return instruction_widget(self.experiment, step["condition"], self.practice_run)
 
     def _after_click(self) -> None:
         if self.tutors and self.tutors[-1].finished:
@@ -824,6 +828,13 @@ class PickPlaceExperiment(StartForm):
             {"condition": c, "run": k, "label": f"Run {k} of {RUNS} · {c}"}
             for k in range(1, RUNS + 1)
         ]
+
+    def instruction(self, step: dict):
+        """The instruction, the worked example and the "Try the controls" step (before the
+        first run, and in a practice run, with time to try them)."""
+        return instruction_widget(
+            self.experiment, step["condition"], self.practice_run, self.hand, step["run"] == 1
+        )
 
     def make_tutor(self, step: dict, path: Path):
         from .pickplace_app import PickPlaceTutor
