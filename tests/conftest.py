@@ -21,6 +21,7 @@ def person(tmp_path, monkeypatch):
         "TUTOR_TRAINEE",
         "TUTOR_CONDITION",
         "TUTOR_CLASS_PLAN",
+        "TUTOR_HAND",
         "JUPYTERHUB_USER",
     ):
         monkeypatch.delenv(var, raising=False)

@@ -70,9 +70,13 @@ def test_the_fifteen_minute_cap(task):
     assert run.elapsed <= run.cap and "of 15:00 used" in run.clock_text()
     run.finish()
     assert run.attempt.stopped == "time" and run.n_demos == n
-    with pytest.raises(RunOverError):
-        run.undo()  # once finished, nothing changes
-    assert run.n_demos == n
+    used = run.elapsed
+    run.undo()  # the cap's one Undo: the time stays spent, the run stays over
+    assert run.n_demos == n - 1 and run.finished and run.elapsed == pytest.approx(used)
+    after = run.record
+    with pytest.raises(RunOverError, match="its one Undo is used"):
+        run.undo()  # only one
+    assert run.record == after and run.n_demos == n - 1
 
 
 def test_a_demo_that_cannot_end_by_the_cap_is_not_started(task):

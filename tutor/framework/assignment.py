@@ -27,6 +27,15 @@ one of the experiment's conditions (any case), or ``balanced`` or blank: balance
 A name holding the separator must be in double quotes (``"Smith, Jo",SF``). Blank lines
 are skipped. A file with only a ``trainee`` column is a roster, balanced throughout.
 
+An optional ``hand`` column says who moves the arm in Experiment 2 (the hands are
+:data:`tutor.views.hand.HANDS`): ``own``, the trainee guides it themself, or ``guided``,
+the tutor guides it for them (e.g. for a trainee who cannot use a mouse or keyboard);
+blank is not set (the trainee may choose on the start form)::
+
+    trainee,condition,hand
+    Mai Anh,RF,guided
+    Zoë,balanced,
+
 JSON format (``*.json``)::
 
     {"format": "lfd-tutor-class-plan", "version": 1, "experiment": 2,
@@ -35,7 +44,11 @@ JSON format (``*.json``)::
 
 ``assign`` is ``"balanced"`` or an object mapping names to a condition or
 ``"balanced"``; ``trainees`` (optional) is the class roster, and a roster name that
-``assign`` does not mention is balanced.
+``assign`` does not mention is balanced. ``hands`` (optional) maps names to a hand
+(``{"Mai Anh": "guided"}``; ``""`` is not set).
+
+This module knows hands only as strings too: the caller passes the hands to check the
+column against (``hands=``); without them the column is ignored, like any other column.
 
 How "balanced" deals. Each trainee to balance is ranked by a stable hash (SHA-256) of
 their folder key; in that order each takes the condition with the fewest trainees so
@@ -51,7 +64,7 @@ Keep the roster fixed once trainees have started: dealing depends on the whole r
 so adding or removing a name may move others to another condition.
 
 Every problem with a plan (unreadable, not a plan, a wrong header, an unknown
-condition, one trainee listed twice with two conditions, a bad name) raises
+condition or hand, one trainee listed twice with two conditions or hands, a bad name) raises
 :class:`~tutor.errors.InvalidPlanError`, whose message names the file and the line or
 entry and says how to fix it. Files are read with :mod:`tutor.fileio` (size-limited,
 JSON only, never pickle).
@@ -63,7 +76,7 @@ import csv
 import hashlib
 import io
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import InvalidFileError, InvalidPlanError, TutorError
@@ -117,6 +130,8 @@ class Assignment:
     reason : str
         The same in plain words, to show the trainee, e.g. "your educator's class plan
         assigns you RF".
+    hand : str or None
+        The hand the plan's ``hand`` column gives the trainee; None when it sets none.
     """
 
     trainee: str
@@ -124,6 +139,7 @@ class Assignment:
     condition: str
     how: str
     reason: str
+    hand: str | None = None
 
 
 @dataclass(frozen=True)
@@ -140,32 +156,41 @@ class ClassPlan:
         Folder key -> the name as the plan gives it.
     source : str
         Where the plan came from (a file path), for messages.
+    hands : dict
+        Folder key -> hand, for the trainees whose ``hand`` the plan sets.
     """
 
     conditions: tuple[str, ...]
     table: dict
     names: dict
     source: str = "the class plan"
+    hands: dict = field(default_factory=dict)
 
     @classmethod
-    def from_entries(cls, entries, conditions, source: str = "the class plan") -> ClassPlan:
-        """A plan from ``(where, name, value)`` entries.
+    def from_entries(
+        cls, entries, conditions, source: str = "the class plan", hands=None
+    ) -> ClassPlan:
+        """A plan from ``(where, name, value)`` or ``(where, name, value, hand)`` entries.
 
         Parameters
         ----------
-        entries : iterable of (str, str, str or None)
+        entries : iterable of (str, str, str or None[, str or None])
             ``where`` says where the entry is for messages (e.g. "line 3"); ``value`` is a
             condition (any case), "balanced" or blank (balanced), or None: listed without
-            a condition (a roster name), balanced unless another entry names one.
+            a condition (a roster name), balanced unless another entry names one;
+            ``hand`` (optional) one of ``hands`` (any case), or blank or None: not set.
         conditions : sequence of str
             The experiment's conditions.
         source : str
             The plan's file, for messages.
+        hands : sequence of str, optional
+            The hands a plan may set; None: hands are not read (ignored).
 
         Raises
         ------
         InvalidPlanError
-            A bad name, an unknown condition, or one trainee given two conditions.
+            A bad name, an unknown condition or hand, or one trainee given two
+            conditions or two hands.
         """
         conditions = tuple(conditions)
         if not conditions or len(set(conditions)) != len(conditions):
@@ -175,12 +200,23 @@ class ClassPlan:
         by_upper = {c.upper(): c for c in conditions}
         wanted: dict[str, tuple[str | None, str]] = {}  # key -> (condition/BALANCED/None, where)
         names: dict[str, str] = {}
-        for where, name, value in entries:
+        chosen_hands: dict[str, tuple[str, str]] = {}  # key -> (hand, where)
+        for entry in entries:
+            where, name, value, *rest = entry
             try:
                 key = trainee_key(name)
             except TutorError as exc:
                 raise InvalidPlanError(f"{source}, {where}: {exc}") from exc
             choice = None if value is None else _condition(value, by_upper, source, where, name)
+            hand = _hand(rest[0] if rest else None, hands, source, where, name)
+            if hand is not None:
+                before = chosen_hands.setdefault(key, (hand, where))
+                if before[0] != hand:
+                    raise InvalidPlanError(
+                        f"{source}: {name!r} ({where}) is given the hand {hand!r}, but "
+                        f"{before[1]} gives the same trainee (folder {key}) {before[0]!r}: "
+                        "keep one of the two"
+                    )
             if key not in wanted or wanted[key][0] is None:
                 wanted[key] = (choice, where)
                 names.setdefault(key, normalise_name(name))
@@ -204,7 +240,13 @@ class ClassPlan:
             fewest = min(conditions, key=lambda c: counts[c])  # ties: the first in order
             counts[fewest] += 1
             table[key] = (fewest, DEALT)
-        return cls(conditions=conditions, table=table, names=names, source=source)
+        return cls(
+            conditions=conditions,
+            table=table,
+            names=names,
+            source=source,
+            hands={k: h for k, (h, _) in chosen_hands.items()},
+        )
 
     def counts(self) -> dict[str, int]:
         """How many of the plan's trainees teach in each condition."""
@@ -233,7 +275,7 @@ class ClassPlan:
                     f"your educator's class plan shares the conditions evenly among its {n} "
                     f"trainees and assigns you {condition}"
                 )
-            return Assignment(trainee, key, condition, how, reason)
+            return Assignment(trainee, key, condition, how, reason, self.hands.get(key))
         condition = self.conditions[hash_rank(key) % len(self.conditions)]
         if self.table:
             reason = (
@@ -246,7 +288,7 @@ class ClassPlan:
                 f"your educator's class plan shares the conditions out by a hash of each "
                 f"trainee's name, and yours assigns you {condition}"
             )
-        return Assignment(trainee, key, condition, HASHED, reason)
+        return Assignment(trainee, key, condition, HASHED, reason, self.hands.get(key))
 
 
 def _condition(value, by_upper: dict, source: str, where: str, name) -> str:
@@ -268,10 +310,31 @@ def _condition(value, by_upper: dict, source: str, where: str, name) -> str:
     )
 
 
+def _hand(value, hands, source: str, where: str, name) -> str | None:
+    """A plan's hand cell as one of ``hands`` (lower case), or None (blank: not set)."""
+    if hands is None or value is None:
+        return None
+    choices = ", ".join(repr(h) for h in hands)
+    if not isinstance(value, str):
+        raise InvalidPlanError(
+            f"{source}, {where}: the hand of {name!r} must be text, one of {choices} (or "
+            f"blank), got {value!r:.40}"
+        )
+    text = value.strip()
+    if not text:
+        return None
+    if text.lower() in hands:
+        return text.lower()
+    raise InvalidPlanError(
+        f"{source}, {where}: {text[:40]!r} (the hand of {name!r}) is not a hand: write one "
+        f"of {choices}, or leave it blank to let the trainee choose"
+    )
+
+
 # --------------------------------------------------------------------- reading files
 
 
-def load_plan(path, conditions, experiment: int = 2) -> ClassPlan:
+def load_plan(path, conditions, experiment: int = 2, hands=None) -> ClassPlan:
     """Read a class plan file (``.csv`` or ``.json``, see the module docstring).
 
     Parameters
@@ -281,6 +344,8 @@ def load_plan(path, conditions, experiment: int = 2) -> ClassPlan:
         The experiment's conditions.
     experiment : int
         The experiment the plan is for (a JSON plan's ``experiment`` must match).
+    hands : sequence of str, optional
+        The hands the ``hand`` column may name (None: the column is ignored).
 
     Raises
     ------
@@ -304,10 +369,10 @@ def load_plan(path, conditions, experiment: int = 2) -> ClassPlan:
         raise
     except InvalidFileError as exc:
         raise InvalidPlanError(str(exc)) from exc
-    return ClassPlan.from_entries(entries, conditions, source=source)
+    return ClassPlan.from_entries(entries, conditions, source=source, hands=hands)
 
 
-def plan_from_env(conditions, experiment: int = 2) -> ClassPlan | None:
+def plan_from_env(conditions, experiment: int = 2, hands=None) -> ClassPlan | None:
     """The plan named by ``TUTOR_CLASS_PLAN``, or None when it is unset.
 
     Raises
@@ -319,14 +384,14 @@ def plan_from_env(conditions, experiment: int = 2) -> ClassPlan | None:
     if not path:
         return None
     try:
-        return load_plan(path, conditions, experiment)
+        return load_plan(path, conditions, experiment, hands)
     except InvalidPlanError as exc:
         raise InvalidPlanError(
             f"{exc} ({PLAN_ENV} names this file; unset it to let trainees choose)"
         ) from exc
 
 
-def _csv_entries(text: str, source: str) -> list[tuple[str, str, str | None]]:
+def _csv_entries(text: str, source: str) -> list[tuple]:
     lines = text.splitlines()
     first = next((i for i, line in enumerate(lines) if line.strip()), None)
     if first is None:
@@ -354,6 +419,7 @@ def _csv_entries(text: str, source: str) -> list[tuple[str, str, str | None]]:
         )
     name_at = header.index("trainee")
     condition_at = header.index("condition") if "condition" in header else None
+    hand_at = header.index("hand") if "hand" in header else None
     entries = []
     for number, row in enumerate(rows[first + 1 :], start=first + 2):
         if not any(cell.strip() for cell in row):
@@ -368,11 +434,12 @@ def _csv_entries(text: str, source: str) -> list[tuple[str, str, str | None]]:
         if not name.strip():
             raise InvalidPlanError(f"{source}, {where} has no trainee name: add one or remove it")
         value = row[condition_at] if condition_at is not None and condition_at < len(row) else ""
-        entries.append((where, name, value))
+        hand = row[hand_at] if hand_at is not None and hand_at < len(row) else None
+        entries.append((where, name, value, hand))
     return entries
 
 
-def _json_entries(data, source: str, experiment: int) -> list[tuple[str, str, str | None]]:
+def _json_entries(data, source: str, experiment: int) -> list[tuple]:
     example = (
         f'{{"format": "{PLAN_FORMAT}", "version": {PLAN_VERSION}, "experiment": {experiment}, '
         f'"assign": "{BALANCED}", "trainees": ["Mai Anh", "Zoë"]}}'
@@ -386,11 +453,12 @@ def _json_entries(data, source: str, experiment: int) -> list[tuple[str, str, st
             f"{source} is version {data.get('version')!r} of the class plan; this tutor reads "
             f"version {PLAN_VERSION}: update the tutor, or write the plan as version 1"
         )
-    unknown = sorted(set(data) - {"format", "version", "experiment", "assign", "trainees"})
+    fields = ("format", "version", "experiment", "assign", "trainees", "hands")
+    unknown = sorted(set(data) - set(fields))
     if unknown:
         raise InvalidPlanError(
             f"{source} holds fields a class plan does not have: {', '.join(unknown)}; "
-            "remove them (the fields are format, version, experiment, assign, trainees)"
+            f"remove them (the fields are {', '.join(fields)})"
         )
     if data.get("experiment") != experiment:
         raise InvalidPlanError(
@@ -404,7 +472,13 @@ def _json_entries(data, source: str, experiment: int) -> list[tuple[str, str, st
         raise InvalidPlanError(
             f'{source}: "trainees" must be a list of names, e.g. ["Mai Anh", "Zoë"]'
         )
-    entries: list[tuple[str, str, str | None]] = []
+    hands = data.get("hands", {})
+    if not isinstance(hands, dict):
+        raise InvalidPlanError(
+            f'{source}: "hands" must be an object of names and hands, e.g. '
+            f'{{"Mai Anh": "guided"}}; got {type(hands).__name__}'
+        )
+    entries: list[tuple] = []
     if isinstance(assign, dict):
         entries += [(f'"assign" entry {name!r}', name, value) for name, value in assign.items()]
     elif assign != BALANCED:
@@ -418,4 +492,5 @@ def _json_entries(data, source: str, experiment: int) -> list[tuple[str, str, st
                 f'{source}: entry {k} of "trainees" must be a name in quotes, got {name!r}'
             )
         entries.append((f'"trainees" entry {k}', name, None))
+    entries += [(f'"hands" entry {name!r}', name, None, hand) for name, hand in hands.items()]
     return entries

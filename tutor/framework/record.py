@@ -241,13 +241,15 @@ def _check_history(record) -> None:
     one (a reset, a Load that replaces the run, a restore); each event's demo count
     follows from the one before (an add one more, an undo one fewer, a test, spend or
     finish the same); a finish is in a finished attempt and no demo is added or taken
-    back after it; and the counts end where the attempts' stored demos do.
+    back after it, except one undo after a finish by the clock (``detail`` "time",
+    Experiment 2's cap); and the counts end where the attempts' stored demos do.
     """
     events = record.events
     if not events:
         return
     attempts = record.attempts
     current, count, finished = 0, 0, False
+    cap_undo = False  # the one undo allowed after the cap ended the attempt is still due
     ends: dict[int, int] = {}
     last = None
     for i, e in enumerate(events):
@@ -270,7 +272,9 @@ def _check_history(record) -> None:
             continue
         if e.kind in ("reset", "restore"):
             _fail(where, f"a {e.kind!r} must begin a new attempt, not be in attempt {current + 1}")
-        if finished and e.kind in ("add", "undo", "load"):
+        if finished and e.kind == "undo" and cap_undo:
+            cap_undo = False
+        elif finished and e.kind in ("add", "undo", "load"):
             _fail(where, f"an {e.kind!r} after attempt {current + 1} was finished")
         expected = {"add": count + 1, "undo": count - 1}.get(e.kind, count)
         if e.kind == "load" and e.n_demos >= count:
@@ -284,7 +288,7 @@ def _check_history(record) -> None:
         if e.kind == "finish":
             if not attempts[current].finished:
                 _fail(where, f"finishes attempt {current + 1}, which is not finished")
-            finished = True
+            finished, cap_undo = True, e.detail == "time"
         count = e.n_demos
         ends[current] = count
     if current != len(attempts) - 1:

@@ -399,17 +399,19 @@ class TeachingRun:
         """Take back the latest demo (kept in ``Attempt.undone``); returns the new latest.
 
         ``spent_seconds`` is clock time the demo used that stays spent (Experiment 2).
-        Refused once the trainee finished the run; a clock that ran out (Experiment 2)
-        does not stop it, since taking a demo back gives no time back.
+        Refused once the run is finished (unless :meth:`_may_undo_finished` allows it: in
+        Experiment 2 once after the cap ended the run); a clock that ran out (Experiment
+        2) does not stop it, since taking a demo back gives no time back. The robot's
+        tests after the demo taken back go with it (they tried what it taught).
         """
-        if self._record.finished:
+        if self._record.finished and not self._may_undo_finished():
             self._refuse_finished()
         if not self.attempt.demos:
             raise InvalidParameterError("there is no demonstration to undo")
         latest = self.session.undo()
         a = self.attempt
         taken = a.demos[-1]
-        tests = tuple(t for t in a.tests if t.after_demo < a.n_demos or t.after_run)
+        tests = tuple(t for t in a.tests if t.after_demo < a.n_demos)
         attempt = replace(
             a,
             demos=a.demos[:-1],
@@ -419,6 +421,11 @@ class TeachingRun:
         )
         self._record = self._record.with_current(attempt, self._event("undo", attempt.n_demos))
         return latest
+
+    def _may_undo_finished(self) -> bool:
+        """Whether :meth:`undo` may take a demo back although the run is finished (never,
+        here; Experiment 2 allows one Undo after the cap ended the run)."""
+        return False
 
     def test(self, plants, after_run: bool = False) -> np.ndarray:
         """Record that the robot tried ``plants`` (indices into B^); returns pass/fail."""

@@ -29,6 +29,10 @@ changes nothing); the run is over once not even the shortest demonstration fits
 (:data:`SHORTEST_DEMO_SECONDS` plus those attempts), and :meth:`PickPlaceRun.finish`
 then records it as stopped "time".
 
+The cap's Undo: the demonstration that ended a run by the cap may have lowered the
+robot's success, so one Undo of the last demo is allowed after the cap ended the run
+(:attr:`PickPlaceRun.cap_undo_left`); its time stays spent and the run stays over.
+
 One voice for the clock: :meth:`PickPlaceRun.clock_state` gives a :class:`ClockState`,
 the clock in the whole seconds it is shown in (time used rounded up to a second, so that
 used and left add up to the 15 minutes), and every word about the clock comes from it:
@@ -515,11 +519,50 @@ class PickPlaceRun(TeachingRun):
             stopped = "time" if self.out_of_time else "finish"
         super().finish(stopped)
 
+    @property
+    def cap_undo_left(self) -> bool:
+        """Whether the one Undo allowed after the cap ended the run is still to be used:
+        the run was finished by the clock ("time") and no demo was taken back since."""
+        a = self.attempt
+        if not (a.finished and a.stopped == "time" and a.demos):
+            return False
+        index = len(self.record.attempts) - 1
+        after = False  # the events of this attempt since its finish
+        for event in self.record.events:
+            if event.attempt == index and event.kind == "finish":
+                after = True
+            elif after and event.attempt == index and event.kind == "undo":
+                return False
+        return after
+
+    @property
+    def can_undo(self) -> bool:
+        """Whether :meth:`undo` would take a demo back now (for the Undo button): a demo
+        is left and the run is open, or the cap's one Undo is still to be used."""
+        return bool(self.attempt.demos) and (not self.record.finished or self.cap_undo_left)
+
+    def _may_undo_finished(self) -> bool:
+        return self.cap_undo_left
+
     def undo(self):
         """Take back the latest demo; the time it and its realisations took stays spent.
 
+        Once the cap ended the run, one Undo is still allowed (:attr:`cap_undo_left`):
+        the run stays over.
+
         Returns the record now current (None when no demo is left).
+
+        Raises
+        ------
+        RunOverError
+            The run is finished (by the trainee, or by the cap with its Undo used).
         """
+        a = self.attempt
+        if a.finished and a.stopped == "time" and a.demos and not self.cap_undo_left:
+            raise RunOverError(
+                "this run was ended by the 15-minute cap and its one Undo is used: the run "
+                f"is over ({self.clock_text()}); start the next run to go on"
+            )
         rec = self.session.latest
         if rec is None:
             raise InvalidParameterError("there is no demo to undo")

@@ -51,6 +51,13 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
     trainee's folder already holds counted runs in another condition (the roster changed
     after they started), they carry on in that condition and the note says so. A plan
     that cannot be used is said in the form, and Start waits for the educator to fix it.
+``TUTOR_HAND``
+    Who moves the arm in Experiment 2 (:mod:`tutor.views.hand`): ``own`` (the default),
+    the trainee guides it themself, or ``guided``, the tutor guides it for them. A class
+    plan's ``hand`` column wins over it for the trainees it sets; for the others the form
+    offers a checkbox, *The tutor guides the arm for me*, ticked when ``TUTOR_HAND`` is
+    ``guided``, which the trainee may change. A value that is not a hand is refused with
+    a message, and Start waits for the educator to fix it.
 ``TUTOR_HEADLESS=1``
     Automated runs: the form starts itself and feeds the bundled demonstrations to every
     run (:meth:`StartForm.autoplay`), under the name set as above or else the one
@@ -58,7 +65,8 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
 
 Stable CSS classes for browser tests: ``lfd-start-form`` (the whole form),
 ``lfd-start-name``, ``lfd-start-condition``, ``lfd-start-condition-prompt`` (what it says
-while none is chosen), ``lfd-start-practice``, ``lfd-start-go`` (the Start button),
+while none is chosen), ``lfd-start-hand`` (the guided-hand checkbox),
+``lfd-start-practice``, ``lfd-start-go`` (the Start button),
 ``lfd-start-confirm`` (*Start anyway*, shown only while a warning waits for it),
 ``lfd-start-note`` and ``lfd-start-results``.
 """
@@ -87,6 +95,7 @@ from ..runtime import (
 from ..tasks.maze_run import PHASE_ORDER
 from ..tasks.pickplace_protocol import ALL_CONDITIONS, EXTRA_CONDITIONS, RUNS
 from ..tasks.pickplace_protocol import CONDITIONS as PICKPLACE_CONDITIONS
+from .hand import HAND_SOURCES, HANDS, hand_and_source
 from .payloads import check_choice, check_text, safely
 from .worked_example import instruction_widget
 
@@ -127,6 +136,9 @@ HEADLESS_CONDITION = "BF"
 CHOOSE_CONDITION = "Choose your condition"
 #: what Start says when pressed before a condition is chosen
 NO_CONDITION = "Choose your condition first (the one your educator gave you), then press Start."
+#: the start form's checkbox for the guided hand, and the hand each of its values asks for
+GUIDED_CHECKBOX = "The tutor guides the arm for me (if you cannot use a mouse or keyboard)"
+CHECKBOX_HANDS = {True: "guided", False: "own"}
 #: what each condition's button says on hover; AF's and HF's say they are beyond the paper
 CONDITION_TIPS = {
     "NF": "NF: no feedback while teaching",
@@ -454,10 +466,14 @@ class StartForm:
             for button in tutor.buttons.values():
                 button.on_click(lambda _: self._safely(self._after_click))
             header = w.HTML(f"<h3>{html.escape(step['label'])}</h3>")
-            intro = instruction_widget(self.experiment, step["condition"], self.practice_run)
+            intro = self.instruction(step)
             self.stage.children = (*self.stage.children, header, intro, tutor.widget)
         if self.finished:
             self._show_results()
+
+    def instruction(self, step: dict):
+        """The instruction and worked example shown above the run of ``step``."""
+        return instruction_widget(self.experiment, step["condition"], self.practice_run)
 
     def _after_click(self) -> None:
         if self.tutors and self.tutors[-1].finished:
@@ -584,6 +600,8 @@ class PickPlaceExperiment(StartForm):
         self.assignment = None
         self.carried_on = None
         self._task = None
+        #: the hand the runs use once started (see :attr:`hand`)
+        self.started_hand: str | None = None
         super().__init__(start)
 
     def _condition_fields(self) -> list:
@@ -593,7 +611,7 @@ class PickPlaceExperiment(StartForm):
             self._condition_problem = f"{exc} Ask your educator."
         if self._fixed_condition is None and self._condition_problem is None:
             try:
-                self.class_plan = plan_from_env(tuple(PICKPLACE_CONDITIONS))
+                self.class_plan = plan_from_env(tuple(PICKPLACE_CONDITIONS), hands=HANDS)
             except InvalidPlanError as exc:
                 text = str(exc)
                 self._condition_problem = f"{text[:1].upper()}{text[1:]} Ask your educator."
@@ -613,9 +631,72 @@ class PickPlaceExperiment(StartForm):
         self.condition_buttons.observe(lambda _: self._condition_changed(), names="value")
         self.beyond_note = w.HTML(f"<small>{html.escape(BEYOND_THE_PAPER)}</small>")
         self.beyond_note.add_class("lfd-start-beyond")
+        self.guided_box = self._hand_field()
         self._follow_plan()
         self._condition_changed()
-        return [w.HBox([self.condition_buttons, self.condition_prompt]), self.beyond_note]
+        return [
+            w.HBox([self.condition_buttons, self.condition_prompt]),
+            self.beyond_note,
+            self.guided_box,
+        ]
+
+    # ---------------------------------------------------------------- the hand
+
+    def _hand_field(self) -> w.Checkbox:
+        """The guided-hand checkbox, ticked as ``TUTOR_HAND`` (or the default) says."""
+        self._hand_problem = None
+        try:
+            self._unasked_hand = hand_and_source()[0]
+        except InvalidParameterError as exc:
+            self._hand_problem = f"{exc} Ask your educator."
+            self._unasked_hand = hand_and_source(explicit=CHECKBOX_HANDS[False])[0]
+        box = w.Checkbox(
+            value=next(v for v, code in CHECKBOX_HANDS.items() if code == self._unasked_hand),
+            description=GUIDED_CHECKBOX,
+            indent=False,
+            layout=w.Layout(width="560px"),
+        )
+        box.add_class("lfd-start-hand")
+        box.observe(lambda _: self._withdraw_warning(), names="value")
+        return box
+
+    def _plan_hand(self) -> str | None:
+        """The hand the class plan sets for the name in the form (None: it sets none)."""
+        return None if self.assignment is None else self.assignment.hand
+
+    def _hand_choice(self) -> tuple[str, str]:
+        """(hand, source) the runs would use: the plan's, else the checkbox's when the
+        trainee changed it, else ``TUTOR_HAND`` or the default."""
+        ticked = CHECKBOX_HANDS[bool(self.guided_box.value)]
+        explicit = None if ticked == self._unasked_hand else ticked
+        plan_hand = self._plan_hand()
+        return hand_and_source(plan_hand, None if plan_hand else explicit)
+
+    @property
+    def hand(self) -> str:
+        """The hand the runs use (:mod:`tutor.views.hand`): once started, the one they
+        started with; before, the one Start would choose."""
+        if self.started_hand is not None:
+            return self.started_hand
+        return self._hand_choice()[0]
+
+    def _asked_hand(self) -> str | None:
+        """The hand passed to each run's tutor: the one the trainee or the plan chose;
+        None leaves it to the tutor (``TUTOR_HAND``, else the default, as here)."""
+        code, source = self._hand_choice()
+        return code if source in ("explicit", "plan") else None
+
+    def hand_line(self) -> str:
+        """The summary's sentence about the hand, e.g. "The tutor guides the arm for you
+        (your educator's class plan sets it)."."""
+        code, source = self._hand_choice()
+        if self.started_hand is not None:
+            code = self.started_hand
+        return f"{HANDS[code].label} ({HAND_SOURCES[source]})."
+
+    def _show_hand_field(self) -> None:
+        """The checkbox shows only while the plan does not set the hand."""
+        self.guided_box.layout.display = "none" if self._plan_hand() else None
 
     def _condition_changed(self) -> None:
         """Say "Choose your condition" beside the buttons while none is chosen."""
@@ -632,8 +713,10 @@ class PickPlaceExperiment(StartForm):
         except TutorError:  # a name the form will refuse at Start, and say why
             self.assignment = None
             self.condition_buttons.value = None
+            self._show_hand_field()
             return
         self.condition_buttons.value = self.assignment.condition
+        self._show_hand_field()
 
     def _name_changed(self) -> None:
         if self.class_plan is not None and self.trainee is None:
@@ -659,6 +742,10 @@ class PickPlaceExperiment(StartForm):
                 notes.append(f"{reason[0].upper()}{reason[1:]} (for {self.assignment.trainee}).")
         else:
             notes.append("Choose the condition your educator gave you.")
+        if self._hand_problem is not None:
+            notes.append(self._hand_problem)
+        elif self._plan_hand() or self._hand_choice()[1] == "env":
+            notes.append(f"Who moves the arm: {self.hand_line()}")
         return notes
 
     @property
@@ -667,8 +754,9 @@ class PickPlaceExperiment(StartForm):
         return self.condition_buttons.value
 
     def check_blocked(self) -> None:
-        if self._condition_problem is not None:
-            raise InvalidParameterError(self._condition_problem)
+        for problem in (self._condition_problem, self._hand_problem):
+            if problem is not None:
+                raise InvalidParameterError(problem)
 
     def check_ready(self, name: str) -> None:
         if self.class_plan is None:
@@ -723,8 +811,16 @@ class PickPlaceExperiment(StartForm):
             return
         self.carried_on = None
         super().start()
-        if self.trainee is not None and self.carried_on:
+        if self.trainee is None:
+            return
+        if self.carried_on:
             self.note.value += f"<br>{html.escape(self.carried_on, quote=False)}"
+        self.note.value += f"<br>{html.escape(self.hand_line(), quote=False)}"
+
+    def _lock_form(self) -> None:
+        # settled before the first run is made, so that a later change asks for nothing
+        self.started_hand, self._started_ask = self._hand_choice()[0], self._asked_hand()
+        super()._lock_form()
 
     def plan(self) -> list[dict]:
         c = self.condition
@@ -732,6 +828,13 @@ class PickPlaceExperiment(StartForm):
             {"condition": c, "run": k, "label": f"Run {k} of {RUNS} · {c}"}
             for k in range(1, RUNS + 1)
         ]
+
+    def instruction(self, step: dict):
+        """The instruction, the worked example and the "Try the controls" step (before the
+        first run, and in a practice run, with time to try them)."""
+        return instruction_widget(
+            self.experiment, step["condition"], self.practice_run, self.hand, step["run"] == 1
+        )
 
     def make_tutor(self, step: dict, path: Path):
         from .pickplace_app import PickPlaceTutor
@@ -751,6 +854,7 @@ class PickPlaceExperiment(StartForm):
             seed=step["run"],
             scene3d=scene,
             practice=self.practice_run,
+            hand=self._started_ask,
         )
         self._task = tutor.task  # one task (and its arm) for all three runs
         return tutor

@@ -8,7 +8,11 @@ about a second) and kept.
 
 - :func:`instruction_text` the words, per experiment and condition;
 - :func:`example_png` the three frames as one PNG image;
-- :func:`instruction_widget` both, as a widget shown above the condition's tutor.
+- :func:`instruction_widget` both, as a widget shown above the condition's tutor;
+- :func:`controls_step` Experiment 2's "Try the controls" step: who moves the arm (the
+  hand, :mod:`tutor.views.hand`), its keys (:func:`tutor.views.hand.controls_html`) and,
+  before the first run and in a practice run, a few minutes to try them (the paper's
+  5-minute familiarisation).
 """
 
 from __future__ import annotations
@@ -22,9 +26,26 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..framework import Trainee
+from .hand import HANDS, check_hand, controls_html
 from .style import AMBIGUOUS, DEMO, FAIL, PASS, UNKNOWN
 
-__all__ = ["INSTRUCTIONS", "instruction_text", "example_png", "instruction_widget"]
+__all__ = [
+    "INSTRUCTIONS",
+    "instruction_text",
+    "example_png",
+    "instruction_widget",
+    "controls_step",
+    "TRY_THE_CONTROLS",
+    "PRACTICE_CONTROLS",
+]
+
+#: the heading of Experiment 2's step that teaches the controls
+TRY_THE_CONTROLS = "Try the controls"
+#: what a practice run adds to it
+PRACTICE_CONTROLS = (
+    "In this practice run nothing counts: give whole demonstrations too, until the "
+    "controls feel easy."
+)
 
 #: the words of each condition's instruction, (experiment, condition) -> text
 INSTRUCTIONS = {
@@ -109,8 +130,36 @@ def example_png(experiment: int, condition: str) -> bytes:
     return buffer.getvalue()
 
 
-def instruction_widget(experiment: int, condition: str, practice: bool = False):
-    """The instruction and the worked example as one widget (CSS class ``lfd-instruction``)."""
+def controls_step(hand, practice: bool = False, first: bool = True):
+    """Experiment 2's "Try the controls" step for ``hand`` (a hand's code), as a widget
+    (CSS class ``lfd-try-controls``): the hand's words and keys, and, in the first run
+    (``first``) or a practice run, its :attr:`~tutor.views.hand.Hand.try_it` sentences.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``hand`` is not one of :data:`tutor.views.hand.HANDS`.
+    """
+    import ipywidgets as w
+
+    chosen = HANDS[check_hand(hand)]
+    words = [chosen.try_it] if first or practice else []
+    if practice:
+        words.append(PRACTICE_CONTROLS)
+    said = "".join(f"<p>{html.escape(x)}</p>" for x in words)
+    box = w.HTML(f"<b>{html.escape(TRY_THE_CONTROLS)}</b>{said}{controls_html(chosen)}")
+    box.add_class("lfd-try-controls")
+    return box
+
+
+def instruction_widget(
+    experiment: int, condition: str, practice: bool = False, hand=None, first: bool = True
+):
+    """The instruction and the worked example as one widget (CSS class ``lfd-instruction``).
+
+    In Experiment 2, ``hand`` (a hand's code, or None for none) adds the
+    :func:`controls_step` under the example (``first``: the trainee's first run).
+    """
     import ipywidgets as w
 
     words = instruction_text(experiment, condition)
@@ -123,7 +172,10 @@ def instruction_widget(experiment: int, condition: str, practice: bool = False):
     png = base64.b64encode(example_png(experiment, condition)).decode("ascii")
     alt = html.escape(f"Worked example in three pictures: {words}")
     frames = w.HTML(f'<img src="data:image/png;base64,{png}" alt="{alt}" style="max-width:720px">')
-    box = w.VBox([heading, frames])
+    parts = [heading, frames]
+    if experiment == 2 and hand is not None:
+        parts.append(controls_step(hand, practice, first))
+    box = w.VBox(parts)
     box.add_class("lfd-instruction")
     return box
 
@@ -251,8 +303,7 @@ def _tray(ax, task, status, title: str, hinted: int | None = None) -> None:
         r, c = divmod(i, cols)
         ax.add_patch(_square(c, rows - 1 - r, colours[s]))
         if glyphs[s]:
-            ax.text(c, rows - 1 - r, glyphs[s], ha="center", va="center", fontsize=5,
-                    color="white")
+            ax.text(c, rows - 1 - r, glyphs[s], ha="center", va="center", fontsize=5, color="white")
     if hinted is not None:
         r, c = divmod(int(hinted), cols)
         ax.text(c, rows - 1 - r, "★", ha="center", va="center", fontsize=9, color="black")
