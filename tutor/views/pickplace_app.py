@@ -205,9 +205,10 @@ class PickPlaceTutor(TutorApp):
         self.panel = w.HTML(layout=w.Layout(width="420px"))
         self.how = w.HTML(controls_html(self.hand))
         self.how.add_class("lfd-controls")
+        self.demo_row = w.HBox(self._demo_controls())
         controls = w.VBox(
             [
-                w.HBox(self._demo_controls()),
+                self.demo_row,
                 self.how,
                 w.HBox(
                     [
