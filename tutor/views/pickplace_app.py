@@ -1,12 +1,25 @@
 """The interactive pick-and-place tutor: one teaching run of Experiment 2.
 
-The trainee clicks a plant on the tray map, then *Demonstrate*: the tutor guides the
-arm to that plant as a person would in kinesthetic teaching (optionally with a
-mistake, to see what it does). What the robot then shows depends on the condition
-(NF, RF, BF, SF; and, beyond the paper, AF, whose picks the tray map shows as it shows
-BF's batch, and HF, NF with a next-demo hint; see :mod:`tutor.tasks.pickplace_protocol`),
-and the clock counts the teaching time the paper's trainees had (15 minutes; 25 s per
-robot attempt).
+The trainee clicks a plant on the tray map, then demonstrates the pick and place in one
+of two ways (the *hand*, :mod:`tutor.views.hand`):
+
+- **their own hand** (the default): *Guide the arm* arms a handle on the gripper in the
+  3-D view; the trainee drags it (or uses the keys or a gamepad) to the plant, closes the
+  hand, carries the plant to the bin, opens the hand and presses Enter. The arm follows
+  the handle through the task's inverse kinematics (:class:`tutor.robot.follow.HandFollower`)
+  and the page sends the whole recording once, at the end
+  (:meth:`tutor.views.scene3d.Scene3D.start_guide`). The plant selected before guiding
+  is the plant meant; a grab elsewhere is the trainee's own demonstration error. Its real
+  duration and the set-up time count on the clock.
+- **the tutor guides the arm for you**: *Demonstrate* has the tutor move the arm there as
+  a person guiding it by hand would (:mod:`tutor.tasks.kinesthetic`), optionally with a
+  mistake, to see what it does. For trainees who cannot use a pointer, for simulated
+  teachers, and where an educator chooses it (``TUTOR_HAND=guided`` or the class plan).
+
+What the robot then shows depends on the condition (NF, RF, BF, SF; and, beyond the
+paper, AF, whose picks the tray map shows as it shows BF's batch, and HF, NF with a
+next-demo hint; see :mod:`tutor.tasks.pickplace_protocol`), and the clock counts the
+teaching time the paper's trainees had (15 minutes; 25 s per robot attempt).
 
 Tray colours (as in the paper's good-versus-bad figure): green, the robot succeeds;
 dark red ✗, it fails; blue ●, demonstrated;
@@ -23,13 +36,16 @@ import time
 import ipywidgets as w
 import numpy as np
 
-from ..errors import InvalidFileError, TutorError
+from ..errors import InvalidFileError, InvalidParameterError, TutorError
 from ..framework.wording import percent, plural
 from ..paper import PAPER_MEAN_ETA, PAPER_THIRD_RUN_ETA
 from ..runtime import headless
 from ..tasks.pickplace import PickPlaceTask
+from ..robot.follow import HandFollower
 from ..tasks.pickplace_protocol import PickPlaceRun
+from ..tasks.recording import steady_hand
 from .app import TutorApp, guarded
+from .hand import HANDS, choose_hand, controls_html
 from .payloads import check_choice
 from .style import DEMO, FAIL, PASS, UNKNOWN
 from .text import (
@@ -47,6 +63,10 @@ log = logging.getLogger(__name__)
 
 #: a click that arrives this soon after a demo ended is the second half of a double click
 DOUBLE_CLICK_SECONDS = 0.4
+#: the own hand's button, and its label while guiding
+GUIDE, CANCEL_GUIDE = "Guide the arm", "Cancel guiding"
+#: seconds a scripted (headless) trainee takes to set up before the first move
+SCRIPTED_SETUP_SECONDS = 2.0
 TRAY_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
 TRAY_GLYPHS = {"pass": "✓", "fail": "✗", "demo": "●", "unknown": ""}
 #: glyph colours that stand out on each status colour
@@ -107,6 +127,19 @@ class PickPlaceTutor(TutorApp):
         Which of the trainee's three runs this is (1, 2 or 3).
     practice : bool
         Mark the run as practice (the class analysis leaves it out).
+    hand : {"own", "guided"}, optional
+        How the trainee demonstrates (:func:`tutor.views.hand.choose_hand`: this, else
+        ``TUTOR_HAND``, else their own hand). The own hand needs a 3-D view that can be
+        guided (``scene3d`` with ``start_guide``); without one the tutor guides the arm,
+        and says so.
+
+    Examples
+    --------
+    >>> from tutor.views.pickplace_app import PickPlaceTutor
+    >>> tutor = PickPlaceTutor("BF", hand="guided", seed=0)
+    >>> tutor.select(44); tutor.demonstrate()
+    >>> tutor.run.n_demos
+    1
     """
 
     demo_columns = ("t", "x", "y", "z", "g")
@@ -121,10 +154,14 @@ class PickPlaceTutor(TutorApp):
         trainee=None,
         run: int = 1,
         practice: bool = False,
+        hand: str | None = None,
     ):
         task = PickPlaceTask() if task is None else task
         super().__init__(PickPlaceRun, condition, task, session_file, trainee, run, practice)
         self.scene3d = scene3d
+        self.hand, hand_note = self._hand_for(hand, scene3d)
+        self._guide_plant: int | None = None  # the plant meant while the trainee guides
+        self._follower: HandFollower | None = None
         self.rng = np.random.default_rng(seed)
         self.selected = 44
         rows, cols = self.task.scene.rows, self.task.scene.cols
@@ -148,8 +185,14 @@ class PickPlaceTutor(TutorApp):
         )
         self.buttons = {
             name: w.Button(description=name, layout=w.Layout(width="120px"))
-            for name in ("Demonstrate", "Test plant", "Undo", "Finish run", "Reset")
+            for name in (GUIDE, "Demonstrate", "Test plant", "Undo", "Finish run", "Reset")
         }
+        self.buttons[GUIDE].layout.width = "150px"
+        self.buttons[GUIDE].icon = "hand-paper-o"
+        self.buttons[GUIDE].add_class("lfd-guide-button")
+        self.buttons[GUIDE].tooltip = "Guide the arm yourself in the 3-D view (Enter ends)"
+        self.buttons[GUIDE].on_click(lambda _: self.guide())
+        self.buttons["Demonstrate"].tooltip = "The tutor guides the arm to the selected plant"
         self.buttons["Reset"].tooltip = "Start a new attempt (asks to confirm; nothing is deleted)"
         self._demo_ended = -1e9
         self.buttons["Demonstrate"].on_click(lambda _: self._on_demonstrate())
@@ -160,9 +203,13 @@ class PickPlaceTutor(TutorApp):
         self._common_widgets()
         self.clock = w.HTML()
         self.panel = w.HTML(layout=w.Layout(width="420px"))
+        self.how = w.HTML(controls_html(self.hand))
+        self.how.add_class("lfd-controls")
+        self.demo_row = w.HBox(self._demo_controls())
         controls = w.VBox(
             [
-                w.HBox([self.buttons["Demonstrate"], self.mistake, self.upload]),
+                self.demo_row,
+                self.how,
                 w.HBox(
                     [
                         self.buttons["Test plant"],
@@ -195,12 +242,130 @@ class PickPlaceTutor(TutorApp):
         if view3d is not None:  # the 3-D view under the tray map and the controls
             self.widget = w.VBox([self.widget, view3d])
         self.widget.add_class("lfd-pickplace-tutor")
+        if hand_note:
+            self.message = hand_note
         self.refresh()
+
+    # ---------------------------------------------------------------- the hand
+
+    @staticmethod
+    def _hand_for(hand, scene3d) -> tuple[str, str]:
+        """The hand this tutor uses, and a note when it cannot be the one asked for."""
+        code = choose_hand(explicit=hand)
+        if code == "own" and not callable(getattr(scene3d, "start_guide", None)):
+            note = (
+                ""
+                if hand is None and scene3d is None  # a tray-only tutor: nothing to guide in
+                else "This tutor has no 3-D view to guide the arm in, so the tutor guides "
+                "the arm for you: click a plant, then Demonstrate."
+            )
+            return "guided", note
+        return code, ""
+
+    def _demo_controls(self) -> list:
+        """The row that gives a demonstration: the hand's own controls, then Upload."""
+        if HANDS[self.hand].mistake_menu:
+            return [self.buttons["Demonstrate"], self.mistake, self.upload]
+        return [self.buttons[GUIDE], self.upload]
+
+    @property
+    def guiding(self) -> bool:
+        """Whether the trainee is guiding the arm right now (between Guide and Enter)."""
+        return self._guide_plant is not None
+
+    @guarded
+    def guide(self) -> None:
+        """Start guiding the arm to the selected plant (own hand); pressed again, cancel.
+
+        The 3-D view arms its handle; the demonstration arrives when the trainee presses
+        Enter there (:meth:`_guided`), as the whole recording.
+        """
+        if self._refuse_if_read_only():
+            return
+        if self.guiding:
+            self.scene3d.stop_guide()
+            self._guide_plant = None
+            self.message = "Guiding cancelled: nothing was recorded and no time was used."
+            return
+        if self.hand != "own":
+            raise InvalidParameterError(
+                "this tutor uses the guided hand: click a plant, then Demonstrate"
+            )
+        self.run.check_open()
+        if self._follower is None:
+            self._follower = HandFollower.for_scene(self.task.scene)
+        plant = self.selected
+        self.scene3d.start_guide(
+            self._follower, on_end=self._guided, on_cancel=self._guide_cancelled
+        )
+        self._guide_plant = plant
+        self.message = (
+            f"Guide the arm to {self.task.plant_name(plant)} in the 3-D view: close the hand "
+            "on the plant, carry it over the bin, open the hand, then press Enter "
+            "(Escape cancels)."
+        )
+
+    @guarded
+    def _guided(self, end) -> None:
+        """The page sent the trainee's recording (a :class:`~tutor.views.scene_guide.GuideEnd`):
+        one demonstration to the plant selected when guiding began."""
+        plant, self._guide_plant = self._guide_plant, None
+        if plant is None:
+            return  # a late end after a cancel: nothing is meant by it
+        finished = self.run.attempt.finished
+        self._working("The robot is learning from your demonstration…")
+        self.run.demonstrate(plant, raw=end.raw, given="own", setup_seconds=end.setup_seconds)
+        self.message = ""
+        self._close_if_out_of_time()
+        if self.run.attempt.finished != finished or self.message == "":
+            self._autosave()
+
+    @guarded
+    def _guide_cancelled(self) -> None:
+        if self._guide_plant is not None:
+            self._guide_plant = None
+            self.message = "Guiding cancelled: nothing was recorded and no time was used."
+
+    def guide_as_steady_hand(self, plant: int | None = None, rng=None) -> None:
+        """A scripted trainee guides the arm to ``plant`` (default: the selected one).
+
+        It goes the whole way a person's does: Guide, moves the page sends, the recording
+        at Enter (:func:`tutor.tasks.recording.steady_hand`, a steady hand at a person's
+        pace). For headless runs and tests; a trainee uses the 3-D view.
+        """
+        if plant is not None:
+            self.select(plant)
+        self.guide()
+        if not self.guiding:
+            return  # refused (the message says why)
+        raw = np.ascontiguousarray(
+            steady_hand(self.task, self.selected, self.rng if rng is None else rng), float
+        )
+        for seq, row in enumerate(raw[:: max(1, len(raw) // 8)], start=1):
+            x, y, z, g = (float(v) for v in row[1:])
+            self.scene3d.receive(
+                {"type": "guide-move", "seq": seq, "x": x, "y": y, "z": z, "g": g}, []
+            )
+        end = {"type": "guide-end", "n": len(raw), "setup": SCRIPTED_SETUP_SECONDS}
+        self.scene3d.receive(end, [raw.tobytes()])
+
+    def _working(self, text: str) -> None:
+        """Say on the 3-D view that a slow step runs (its next refresh clears it)."""
+        working = getattr(self.scene3d, "working", None)
+        if callable(working):
+            working(text)
 
     # ---------------------------------------------------------------- actions
 
     def select(self, plant: int) -> None:
-        self.selected = int(plant)
+        if self.guiding and int(plant) != self._guide_plant:
+            self.message = (
+                f"You are guiding the arm to {self.task.plant_name(self._guide_plant)}: "
+                f"press Enter in the 3-D view to end, or {CANCEL_GUIDE}, before choosing "
+                "another plant."
+            )
+        else:
+            self.selected = int(plant)
         self.refresh()
 
     def _tray_grid(self, rows: int, cols: int) -> w.GridBox:
@@ -237,12 +402,18 @@ class PickPlaceTutor(TutorApp):
         back to "no mistake" afterwards."""
         if self._refuse_if_read_only():
             return
+        if self.guiding:
+            raise InvalidParameterError(
+                "you are guiding the arm: press Enter in the 3-D view to end that "
+                "demonstration first (or cancel it)"
+            )
         plant = self.selected if plant is None else plant
         if mistake is None:  # the chooser's value, as the page set it
             mistake = MISTAKES[check_choice(self.mistake.value, "the mistake", tuple(MISTAKES))]
         finished = self.run.attempt.finished
         try:
-            self.run.demonstrate(plant, mistake=mistake, rng=self.rng, chosen_by="guided")
+            self._working("The robot is learning from the demonstration…")
+            self.run.demonstrate(plant, mistake=mistake, rng=self.rng, given="guided")
             self.message = ""
         except TutorError as exc:
             self.message = str(exc)
@@ -351,17 +522,36 @@ class PickPlaceTutor(TutorApp):
         return plant
 
     def autoplay(self, plants, mistakes=None) -> None:
-        """Headless runs only (TUTOR_HEADLESS=1): demonstrate ``plants`` then finish."""
+        """Headless runs only (TUTOR_HEADLESS=1): demonstrate ``plants`` then finish.
+
+        With the own hand a scripted steady hand guides the arm through the 3-D view's
+        guide (:meth:`guide_as_steady_hand`); ``mistakes`` (index -> mistake) are the
+        guided hand's.
+        """
         if not headless() or self.run.finished:
             return
         mistakes = mistakes or {}
         for i, plant in enumerate(plants):
             if self.run.finished:
                 break
-            self.demonstrate(plant, mistake=mistakes.get(i))
+            if self.hand == "own":
+                self.guide_as_steady_hand(plant)
+            else:
+                self.demonstrate(plant, mistake=mistakes.get(i))
         self.finish()
 
     # ---------------------------------------------------------------- display
+
+    def _refresh_guide(self) -> None:
+        """The Guide button: "Cancel guiding" while guiding; off when the run is over."""
+        button = self.buttons[GUIDE]
+        _set(button, "description", CANCEL_GUIDE if self.guiding else GUIDE)
+        _set(button, "icon", "stop" if self.guiding else "hand-paper-o")
+        _set(button, "disabled", (self.run.finished and not self.guiding) or self.read_only)
+        if self.guiding:
+            button.add_class("lfd-guiding")
+        else:
+            button.remove_class("lfd-guiding")
 
     def _draw_tray(self, status, rec, hinted: int | None = None) -> None:
         """Colour, glyph and tooltip of every plant; exactly one drawn as selected.
@@ -417,11 +607,15 @@ class PickPlaceTutor(TutorApp):
         hint = self.current_hint()
         self._draw_tray(status, rec, None if hint is None else hint.plant)
         sf_or_after = run.condition == "SF" or run.finished
-        self.buttons["Test plant"].disabled = not sf_or_after or rec is None or self.read_only
+        busy = self.guiding  # while guiding, only Cancel guiding (and Enter) act
+        self.buttons["Test plant"].disabled = (
+            not sf_or_after or rec is None or self.read_only or busy
+        )
         for name in ("Demonstrate", "Undo"):
-            self.buttons[name].disabled = run.finished or self.read_only
+            self.buttons[name].disabled = run.finished or self.read_only or busy
         for name in ("Finish run", "Reset"):
-            self.buttons[name].disabled = self.read_only
+            self.buttons[name].disabled = self.read_only or busy
+        self._refresh_guide()
         timing = run.clock_state()  # the clock line and the cap's words: one state
         self.clock.value = f"<b>Time</b>: {html.escape(timing.line())}"
         vis = run.visibility()
@@ -437,7 +631,7 @@ class PickPlaceTutor(TutorApp):
             rec,
             vis,
             run.session.history,
-            generated=demo is not None and demo.chosen_by == "guided",
+            generated=demo is not None and demo.given == "guided",
             mistake=demo.mistake if demo is not None else "",
             finished=run.finished,
             rule_message=None if hint is None else hint_sentence(self.task, hint.plant),
@@ -458,6 +652,8 @@ class PickPlaceTutor(TutorApp):
         parts.append(self.message_html())
         self.panel.value = "".join(parts)
         self._refresh_common()
+        if self.guiding:  # a file loaded mid-guide would interleave two demonstrations
+            self.upload.disabled = True
         if self.scene3d is not None:
             self.scene3d.update(run, status)
 
