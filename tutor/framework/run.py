@@ -290,7 +290,8 @@ class TeachingRun:
         index = len(self._record.attempts) - (0 if begins else 1)
         return Event(kind, self.clock(), index, n, detail)
 
-    def _check_open(self) -> None:
+    def check_open(self) -> None:
+        """Raise :class:`RunOverError` unless demos may still be added (the run is open)."""
         if self.finished:
             self._refuse_finished()
 
@@ -347,7 +348,7 @@ class TeachingRun:
         InvalidDemoError, InvalidParameterError
             The demo cannot be used; nothing changed.
         """
-        self._check_open()
+        self.check_open()
         self._check_room(1)
         given = check_given(given)
         kept = None if recording is None else round_recording(_recording(recording))
@@ -376,7 +377,7 @@ class TeachingRun:
         keyword arguments (``given`` is "loaded" unless they say otherwise). If one is
         refused, the run is left exactly as it was and the error names the demo.
         """
-        self._check_open()
+        self.check_open()
         items = list(items)
         self._check_room(len(items))
         before_record, before_session = self._record, self.session

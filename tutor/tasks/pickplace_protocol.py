@@ -354,7 +354,9 @@ class PickPlaceRun(TeachingRun):
         """The clock line, e.g. "13:41 of 15:00 used, 1:19 left" (:meth:`ClockState.line`)."""
         return self.clock_state().line()
 
-    def _check_open(self) -> None:
+    def check_open(self) -> None:
+        """Raise :class:`RunOverError` (saying why, from the clock) unless the run is open:
+        not finished, and the shortest demonstration still fits before the cap."""
         if self.out_of_time or self.finished:
             raise RunOverError(self.clock_state().over())
 
@@ -367,7 +369,7 @@ class PickPlaceRun(TeachingRun):
             It would not end, with the attempts shown after it, by the 15-minute cap
             (nothing changed); or the run is over.
         """
-        self._check_open()
+        self.check_open()
         if seconds is not None and not self.fits(seconds):
             raise RunOverError(self.clock_state(seconds).refusal())
         return super().add_demo(raw, seconds=seconds, **options)
@@ -455,7 +457,7 @@ class PickPlaceRun(TeachingRun):
             shortest one fits, the run is over (:attr:`finished`; :meth:`finish` then
             records it as stopped "time") and ends with its last complete demo.
         """
-        self._check_open()
+        self.check_open()
         plant = self._check_plant(plant)
         given = check_given(given)
         setup = _setup_seconds(setup_seconds)

@@ -611,8 +611,9 @@ class PickPlaceTutor(TutorApp):
         self.buttons["Test plant"].disabled = (
             not sf_or_after or rec is None or self.read_only or busy
         )
-        for name in ("Demonstrate", "Undo"):
-            self.buttons[name].disabled = run.finished or self.read_only or busy
+        self.buttons["Demonstrate"].disabled = run.finished or self.read_only or busy
+        # after the cap ended a run, its last demo may still be taken back once
+        self.buttons["Undo"].disabled = not run.can_undo or self.read_only or busy
         for name in ("Finish run", "Reset"):
             self.buttons[name].disabled = self.read_only or busy
         self._refresh_guide()
