@@ -11,6 +11,7 @@ from __future__ import annotations
 __all__ = [
     "TutorError",
     "InvalidDemoError",
+    "InvalidRecordingError",
     "InvalidFrameError",
     "DemoFrameMismatchError",
     "TooFewSamplesError",
@@ -33,6 +34,13 @@ class TutorError(Exception):
 
 class InvalidDemoError(TutorError, ValueError):
     """A demonstration cannot be used: NaN/inf, too short, wrong columns, time not increasing."""
+
+
+class InvalidRecordingError(InvalidDemoError):
+    """A recording of the trainee's own hand guiding the arm (t, x, y, z, g) cannot be a
+    demonstration: not a table of 5 numbers a row, NaN/inf, a single sample, time not
+    increasing, a jump, a hand value outside [0, 1], a hand that never closes or never
+    opens again, a target out of the arm's reach, or too long."""
 
 
 class InvalidFrameError(TutorError, ValueError):

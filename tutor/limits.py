@@ -24,6 +24,8 @@ __all__ = [
     "MAX_SEEDS",
     "MAX_SEED",
     "MAX_STROKE_POINTS",
+    "MAX_RECORDING_SECONDS",
+    "MAX_RECORDING_SAMPLES",
     "MAX_TEXT_CHARS",
 ]
 
@@ -73,5 +75,10 @@ MAX_SEED = 2**63 - 1
 #: the most points one stroke may have (about 3 minutes of drawing at 120 pointer
 #: events a second; a keyboard stroke has one point per millimetre of its path)
 MAX_STROKE_POINTS = 20_000
+#: the longest recording of a trainee's own hand guiding the arm (s): a careful
+#: demonstration takes 10 to 40 s, and a run's clock has 15 minutes in all
+MAX_RECORDING_SECONDS = 300.0
+#: the most samples one such recording may have: 5 minutes at 120 samples a second
+MAX_RECORDING_SAMPLES = 36_000
 #: the longest text a field may send (a file path may be 4096 bytes long)
 MAX_TEXT_CHARS = 4096
