@@ -249,8 +249,7 @@ def _guide_number(content: dict, key: str, what: str) -> float:
 def _guide_message(content, kind: str) -> dict:
     if not isinstance(content, dict) or content.get("type") != kind:
         raise InvalidPayloadError(
-            f"the guide sent {_kind(content)} where a {kind!r} message should be: "
-            "reload the page"
+            f"the guide sent {_kind(content)} where a {kind!r} message should be: reload the page"
         )
     return content
 

@@ -91,6 +91,7 @@ from .scene_animation import (
     step_track,
     transform_tracks,
 )
+from .scene_guide import GUIDE_MESSAGES, Guide
 from .scene_meshes import (
     HAND_CLOSED,
     HAND_OPEN,
@@ -100,7 +101,6 @@ from .scene_meshes import (
     plant_ball,
     robot_meshes,
 )
-from .scene_guide import GUIDE_MESSAGES, Guide
 from .scene_page import choose_mode, live_page_url, page, scene_data, viewer_widget_class
 from .style import DEMO, FAIL, PASS, UNKNOWN
 
@@ -680,8 +680,13 @@ class Scene3D:
         links = [self._node_path(n) for n in self._robot.node_names] if self._robot else []
         top = float(sc.table_center[2] + sc.table_size[2] / 2)
         guide = Guide(
-            follower, on_end, on_cancel, links, self._node_path("lfd/hand"),
-            guide_limits(sc), table=top,
+            follower,
+            on_end,
+            on_cancel,
+            links,
+            self._node_path("lfd/hand"),
+            guide_limits(sc),
+            table=top,
         )
         self.clear_animation()
         self.show_configuration(guide.state.q)
