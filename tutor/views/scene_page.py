@@ -11,7 +11,8 @@ The HTML, the page's script and the widget's script are static files in
 ``scene3d_view.js``; ``scene3d_live.html`` for the live server's page;
 ``scene3d_wheel.js`` in both pages: the wheel scrolls the page until the view is
 clicked; ``guide.js`` in both pages: guiding the arm with one's own hand), read
-with :mod:`importlib.resources`. meshcat's own viewer script comes from the installed meshcat package (it works offline).
+with :mod:`importlib.resources`. meshcat's own viewer script comes from the installed
+meshcat package (it works offline).
 """
 
 from __future__ import annotations

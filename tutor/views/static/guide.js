@@ -251,6 +251,9 @@
       hand: msg.hand ? viewer.scene_tree.find(split(msg.hand)) : null,
       red: new Set(),
       rec: [],
+      knots: [],
+      k: 0,
+      next: 0,
       seq: 0,
       out: null,
       dirty: false,
@@ -289,29 +292,51 @@
     if (msg.what === "guide-move") { G.out = null; return; }
     if (msg.what === "guide-end") { // guide again, from where the hand is
       G.rec = [];
+      G.knots = [];
+      G.k = 0;
       G.t0 = null;
       G.armedAt = performance.now();
       state = "armed";
       showFocus();
     }
   }
-  function moved() {
+  // What was recorded: every change of the hand is a knot (its time: the input event's
+  // own timestamp, or the clock's tick for keys and the gamepad), and the recording is
+  // the knots sampled every TICK_MS (linear in x, y, z between knots; g as it was). So a
+  // main thread kept busy by drawing (software GL takes ~200 ms a frame) delays when the
+  // samples are taken, never where they are: the events keep their timestamps.
+  function moved(at) {
     if (state === "sent") return;
     const now = performance.now();
+    const t = Math.min(now, at === undefined ? now : at);
     if (state === "armed") {
       state = "recording";
-      G.t0 = now;
-      G.setup = Math.min(120, (now - G.armedAt) / 1000);
-      G.nextSample = now;
-      record(now);
+      G.t0 = t;
+      G.setup = Math.min(120, Math.max(0, (t - G.armedAt) / 1000));
+      G.knots = [];
+      G.next = t;
       showFocus();
     }
+    knot(t);
     drawHandle();
     sendMove();
   }
-  function record(now) {
-    G.rec.push((now - G.t0) / 1000, G.h[0], G.h[1], G.h[2], G.g);
-    G.nextSample = now + TICK_MS;
+  function knot(t) {
+    const last = G.knots[G.knots.length - 1];
+    G.knots.push([last ? Math.max(t, last[0]) : t, G.h[0], G.h[1], G.h[2], G.g]);
+  }
+  function fill(now) { // the samples due up to now
+    const K = G.knots;
+    while (G.next <= now) {
+      const t = G.next;
+      while (G.k + 1 < K.length && K[G.k + 1][0] <= t) G.k += 1;
+      const a = K[G.k];
+      const b = G.k + 1 < K.length ? K[G.k + 1] : null;
+      const s = b && b[0] > a[0] ? (t - a[0]) / (b[0] - a[0]) : 0;
+      const at = (i) => (b ? a[i] + s * (b[i] - a[i]) : a[i]);
+      G.rec.push((t - G.t0) / 1000, at(1), at(2), at(3), a[4]);
+      G.next += TICK_MS;
+    }
   }
   function end() {
     if (state !== "recording") {
@@ -319,7 +344,11 @@
       return;
     }
     const now = performance.now();
-    if (now - G.t0 > 1000 * G.rec[G.rec.length - 5] + 1) record(now);
+    knot(now);
+    fill(now);
+    if (now - G.t0 > 1000 * G.rec[G.rec.length - 5] + 1) {
+      G.rec.push((now - G.t0) / 1000, G.h[0], G.h[1], G.h[2], G.g);
+    }
     const data = new Float64Array(G.rec);
     state = "sent";
     say("Sent: the tutor is looking at your demonstration...");
@@ -340,7 +369,7 @@
   function tick() {
     if (!G || state === "sent") return;
     const now = performance.now();
-    const dt = Math.min(0.1, (now - G.last) / 1000);
+    const dt = Math.min(0.25, (now - G.last) / 1000);
     G.last = now;
     const want = [0, 0, 0];
     const fine = held.has("Shift");
@@ -367,7 +396,7 @@
       if (place(p)) moved();
       else G.vel = [0, 0, 0];
     }
-    if (state === "recording" && now >= G.nextSample - 2) record(now);
+    if (state === "recording") { knot(now); fill(now); }
   }
   function pad(plane, want, speed) {
     const pads = navigator.getGamepads ? navigator.getGamepads() : [];
@@ -425,18 +454,20 @@
       drag.pxPerM = Math.max(50, Math.hypot(b[0] - a[0], b[1] - a[1]) / 0.1);
     }
   }, true);
+  function dragTo(ev) { // the handle where the pointer event ev takes it (or null)
+    if (drag.vertical) return [G.h[0], G.h[1], drag.z0 + (drag.y0 - ev.clientY) / drag.pxPerM];
+    const at = onPlane(ev.clientX, ev.clientY, G.h[2]);
+    return at ? [at[0] + drag.off[0], at[1] + drag.off[1], G.h[2]] : null;
+  }
   window.addEventListener("pointermove", (e) => {
     if (!drag || !G || e.pointerId !== drag.id) return;
     e.stopPropagation();
-    let p;
-    if (drag.vertical) {
-      p = [G.h[0], G.h[1], drag.z0 + (drag.y0 - e.clientY) / drag.pxPerM];
-    } else {
-      const at = onPlane(e.clientX, e.clientY, G.h[2]);
-      if (!at) return;
-      p = [at[0] + drag.off[0], at[1] + drag.off[1], G.h[2]];
+    // the moves the browser merged into this event while the page was busy, each at its time
+    const all = e.getCoalescedEvents ? e.getCoalescedEvents() : [];
+    for (const ev of all.length ? all : [e]) {
+      const p = dragTo(ev);
+      if (p && place(p)) moved(ev.timeStamp);
     }
-    if (place(p)) moved();
   }, true);
   const release = (e) => {
     if (!drag || e.pointerId !== drag.id) return;
