@@ -492,7 +492,7 @@ def test_live_scene_streams_to_the_loopback_server(task):
     assert url == get_server().web_url and url.startswith(f"http://{LOOPBACK}:")
     # the tutor's page of this scene: meshcat's, with the stamp
     page = url.replace("/static/", f"/lfd/{scene.scene_id}/")
-    assert f"src='{page}'" in scene.widget.children[1].value
+    assert scene.widget.children[1].src == page
     with urllib.request.urlopen(page, timeout=10) as reply:
         assert b"lfd-stamp" in reply.read()
     # the server's own snapshot of this scene's tree

@@ -87,7 +87,7 @@ def test_three_live_scenes_have_their_own_address_and_tree(task):
     web = get_server().web_url
     pages = [web.replace("/static/", f"/lfd/{s.scene_id}/") for s in scenes]
     for s, page in zip(scenes, pages, strict=True):
-        assert f"src='{page}'" in s.widget.children[1].value  # the live iframe's address
+        assert s.widget.children[1].src == page  # the live frame's address
         with urllib.request.urlopen(page, timeout=10) as reply:
             assert b"lfd-ws" in reply.read()
     tutors = [

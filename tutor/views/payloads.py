@@ -8,7 +8,9 @@ can hold (or, for uploads, any bytes), whatever the page's own script would send
 - a choice from buttons or a list (a condition, a mistake, an experiment):
   :func:`check_choice`;
 - a file from a ``FileUpload`` button: :func:`check_upload`;
-- a message from the 3-D view (its "hello" when it opens): :func:`check_view_message`.
+- a message from the 3-D view (its "hello" when it opens): :func:`check_view_message`;
+- while the trainee guides the arm: a move of the handle, :func:`check_guide_move`, and
+  the recording at the end, :func:`check_guide_end`.
 
 Each returns the value in the form the tutor needs, or raises
 :class:`~tutor.errors.InvalidPayloadError` saying in plain words what was wrong.
@@ -36,6 +38,10 @@ __all__ = [
     "check_choice",
     "check_upload",
     "check_view_message",
+    "check_guide_move",
+    "check_guide_end",
+    "MAX_GUIDE_SAMPLES",
+    "MAX_SETUP_SECONDS",
     "shown_upload_name",
     "safely",
     "MAX_STROKE_POINTS",
@@ -45,6 +51,13 @@ __all__ = [
 #: a 3-D view's id: what its script makes (letters and digits), at most 32 of them
 _VIEW_ID = re.compile(r"[A-Za-z0-9]{1,32}")
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+#: the most samples one guided recording may arrive with: 30 minutes at 40 Hz (the
+#: 15-minute clock stops a run long before; :mod:`tutor.tasks.recording` judges the rest)
+MAX_GUIDE_SAMPLES = 30 * 60 * 40
+#: the longest set-up (seconds from arming the guide to the first move) a page may report
+MAX_SETUP_SECONDS = 120.0
+#: the largest move sequence number a page may send (a JavaScript safe integer)
+_MAX_SEQ = 2**53 - 1
 
 log = logging.getLogger(__name__)
 
@@ -221,6 +234,98 @@ def check_view_message(content) -> str | None:
             "reload the page"
         )
     return view
+
+
+def _guide_number(content: dict, key: str, what: str) -> float:
+    value = content.get(key)
+    if not _is_number(value) or not np.isfinite(float(value)):
+        raise InvalidPayloadError(
+            f"the guide sent {_kind(value)} as {what} ({key!r}), not a finite number: "
+            "move the handle again"
+        )
+    return float(value)
+
+
+def _guide_message(content, kind: str) -> dict:
+    if not isinstance(content, dict) or content.get("type") != kind:
+        raise InvalidPayloadError(
+            f"the guide sent {_kind(content)} where a {kind!r} message should be: reload the page"
+        )
+    return content
+
+
+def check_guide_move(content) -> tuple[int, np.ndarray, float]:
+    """A move of the guide's handle, ``{"type": "guide-move", "seq", "x", "y", "z", "g"}``,
+    as (seq, the target (3,) in metres, the hand g 0 open .. 1 closed).
+
+    Raises
+    ------
+    InvalidPayloadError
+        Not such an object; ``seq`` not a whole number from 0 to 2**53 - 1; a coordinate
+        or ``g`` that is not a finite number; ``g`` outside 0..1.
+    """
+    content = _guide_message(content, "guide-move")
+    seq = content.get("seq")
+    if not isinstance(seq, int) or isinstance(seq, bool) or not 0 <= seq <= _MAX_SEQ:
+        raise InvalidPayloadError(
+            f"the guide sent {_kind(seq)} as the move's number ('seq'), not a whole number "
+            "from 0: reload the page"
+        )
+    xyz = np.array([_guide_number(content, k, f"the handle's {k}") for k in "xyz"])
+    g = _guide_number(content, "g", "the hand")
+    if not 0.0 <= g <= 1.0:
+        raise InvalidPayloadError(
+            f"the guide sent the hand as {g}, outside 0 (open) .. 1 (closed): reload the page"
+        )
+    return seq, xyz, g
+
+
+def check_guide_end(content, buffers) -> tuple[np.ndarray, float]:
+    """The end of a guided demonstration, ``{"type": "guide-end", "n": T, "setup": s}``
+    with one buffer of T * 5 float64 (t, x, y, z, g per sample), as (the raw recording
+    (T, 5), the set-up seconds).
+
+    Only the form is checked here (sizes, numbers); whether the recording makes a
+    demonstration (finite, time increasing, in reach, ...) is for
+    :func:`tutor.tasks.recording.check_recording`.
+
+    Raises
+    ------
+    InvalidPayloadError
+        Not such an object; ``n`` not a whole number from 1 to :data:`MAX_GUIDE_SAMPLES`;
+        not exactly one buffer of ``n`` * 5 * 8 bytes; ``setup`` not a number from 0 to
+        :data:`MAX_SETUP_SECONDS`.
+    """
+    content = _guide_message(content, "guide-end")
+    n = content.get("n")
+    if not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= MAX_GUIDE_SAMPLES:
+        raise InvalidPayloadError(
+            f"the guide sent {_kind(n)} as the number of samples ('n'), not a whole number "
+            f"from 1 to {MAX_GUIDE_SAMPLES}: guide the arm again"
+        )
+    setup = _guide_number(content, "setup", "the set-up time")
+    if not 0.0 <= setup <= MAX_SETUP_SECONDS:
+        raise InvalidPayloadError(
+            f"the guide sent a set-up time of {setup:g} s, outside 0 to "
+            f"{MAX_SETUP_SECONDS:g} s: guide the arm again"
+        )
+    if not isinstance(buffers, (list, tuple)) or len(buffers) != 1:
+        count = len(buffers) if isinstance(buffers, (list, tuple)) else 0
+        raise InvalidPayloadError(
+            f"the guide's recording arrived in {count} parts, not 1: guide the arm again"
+        )
+    try:
+        raw = memoryview(buffers[0]).cast("B")
+    except TypeError:
+        raise InvalidPayloadError(
+            "the guide's recording arrived as something other than bytes: guide the arm again"
+        ) from None
+    if raw.nbytes != n * 5 * 8:
+        raise InvalidPayloadError(
+            f"the guide's recording has {raw.nbytes} bytes, not the {n * 40} of {n} samples "
+            "(t, x, y, z, g as 8-byte numbers): guide the arm again"
+        )
+    return np.frombuffer(raw, dtype="<f8").reshape(n, 5).copy(), setup
 
 
 def safely(action: Callable[[], object], say: Callable[[str], None]) -> None:

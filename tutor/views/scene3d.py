@@ -82,7 +82,7 @@ import numpy as np
 from ..errors import InvalidParameterError, InvalidPayloadError
 from ..fileio import atomic_write_text
 from .meshcat_recorder import SceneRecorder, empty_animation, frame_commands
-from .payloads import check_view_message
+from .payloads import check_view_message, safely
 from .scene_animation import (
     Track,
     key_samples,
@@ -91,6 +91,7 @@ from .scene_animation import (
     step_track,
     transform_tracks,
 )
+from .scene_guide import GUIDE_MESSAGES, Guide
 from .scene_meshes import (
     HAND_CLOSED,
     HAND_OPEN,
@@ -234,6 +235,7 @@ class Scene3D:
         self._trails: dict[str, list[bytes]] = {}  # what each trail group shows (digests)
         self._stamp = 0  # updates sent to the live viewer (it reports the last applied)
         self.replay_button = None
+        self._guide: Guide | None = None
         self._draw_static_scene()  # streams to this scene on the live server as drawn
         self.set_status(np.full(len(task.conditions), "unknown", dtype=object))
         self._check_live()
@@ -583,35 +585,141 @@ class Scene3D:
         return "<span style='font-size:12px'>" + "".join(items) + "</span>"
 
     def _make_view(self):
-        """The viewer widget: an iframe to the live server, or the in-notebook viewer."""
-        import ipywidgets as w
-
+        """The viewer widget: meshcat's page in a frame, from the live server (``src``) or
+        fed over the widget's comm (``page``); both pass the guide's messages."""
+        cls = viewer_widget_class()
         if self.mode == "live":
-            url = html.escape(live_page_url(self.recorder.web_url or "", self.scene_id))
-            style = f"width:100%;height:{self.height}px;border:1px solid #ccc"
-            return w.HTML(f"<iframe src='{url}' style='{style}'></iframe>")
-        view = viewer_widget_class()(height=self.height, page=page("3-D view", "", "", ""))
+            url = live_page_url(self.recorder.web_url or "", self.scene_id)
+            view = cls(height=self.height, src=url)
+        else:
+            view = cls(height=self.height, page=page("3-D view", "", "", ""))
+            self.recorder.listeners.append(self._collect)
         view.on_msg(self._on_view_msg)
-        self.recorder.listeners.append(self._collect)
         return view
 
     def _collect(self, kind, path, packed) -> None:
         if self._pending is not None:  # a browser shows the view: keep what changes
             self._pending.append((kind, path, packed))
 
-    def _on_view_msg(self, _widget, content, _buffers) -> None:
-        """A message from the page's view, checked (:func:`.payloads.check_view_message`);
-        one the tutor does not understand is said in the caption, and nothing is sent."""
-        try:
-            view = check_view_message(content)
-        except InvalidPayloadError as exc:
-            self.message = f"{str(exc)[:1].upper()}{str(exc)[1:]}."
+    def _on_view_msg(self, _widget, content, buffers) -> None:
+        """A message from the page's view (:meth:`receive`). One the tutor does not
+        understand is said in the caption and changes nothing (a refused guide message
+        is answered, so that the page guides on); nothing raises out of here."""
+
+        def act():
+            try:
+                self.receive(content, buffers)
+            except InvalidPayloadError as exc:
+                kind = content.get("type") if isinstance(content, dict) else None
+                if self._guide is not None and kind in GUIDE_MESSAGES:
+                    self._send_view(
+                        {"type": "guide", "cmd": "refused", "what": kind, "words": str(exc)}
+                    )
+                raise
+
+        def say(text: str) -> None:
+            self.message = f"{text[:1].upper()}{text[1:]}" + ("" if text.endswith(".") else ".")
             self.refresh()
+
+        safely(act, say)
+
+    def receive(self, content, buffers=()) -> None:
+        """Act on a message the page's view sent: a hello (a browser opened the view: the
+        whole scene goes to it, then changes only) or the guide's move, end or cancel
+        (:mod:`tutor.views.scene_guide`).
+
+        Raises
+        ------
+        InvalidPayloadError
+            A message the tutor does not know, or a guide message that is not one
+            (:mod:`tutor.views.payloads`); nothing changes and guiding goes on.
+        """
+        kind = content.get("type") if isinstance(content, dict) else None
+        if kind in GUIDE_MESSAGES:
+            self._guide_message(kind, content, list(buffers or []))
             return
-        if view is not None:
+        view = check_view_message(content)
+        if view is None:
+            return
+        if self.mode == "static":
             # a browser (re)opened the view: send it the whole scene, then changes only
             self._pending = []
-            self._view.send({"type": "full", "to": view}, self._scene_chunks())
+            self._send_view({"type": "full", "to": view}, self._scene_chunks())
+        if self._guide is not None:  # a reloaded page is armed again
+            self._send_view(self._guide.start_message())
+
+    def _send_view(self, content: dict, buffers=None) -> None:
+        if self._view is not None:
+            self._view.send(content, buffers)
+
+    # ------------------------------------------------------------------ guiding the arm
+
+    @property
+    def guiding(self) -> bool:
+        """Whether the trainee is guiding the arm in this view now."""
+        return self._guide is not None
+
+    def start_guide(self, follower, on_end, on_cancel=None) -> None:
+        """Let the trainee guide the arm with the handle in the view (keys, mouse, gamepad).
+
+        The animation stops and the robot goes to the follower's start; the page arms its
+        guide. When the trainee presses Enter, ``on_end`` gets the recording
+        (:class:`~tutor.views.scene_guide.GuideEnd`); Escape calls ``on_cancel``. After
+        either, the view shows the arm at its start again.
+
+        Parameters
+        ----------
+        follower : HandFollower
+            :class:`tutor.robot.follow.HandFollower` of this scene.
+        on_end : callable(GuideEnd)
+        on_cancel : callable(), optional
+        """
+        from ..robot.follow import guide_limits
+
+        sc = self.scene
+        links = [self._node_path(n) for n in self._robot.node_names] if self._robot else []
+        top = float(sc.table_center[2] + sc.table_size[2] / 2)
+        guide = Guide(
+            follower,
+            on_end,
+            on_cancel,
+            links,
+            self._node_path("lfd/hand"),
+            guide_limits(sc),
+            table=top,
+        )
+        self.clear_animation()
+        self.show_configuration(guide.state.q)
+        self._guide = guide
+        self.refresh()
+        self._stamp_live()
+        self._send_view(guide.start_message())
+
+    def stop_guide(self) -> None:
+        """Stop guiding (no callback is called); the view shows the arm at its start."""
+        if self._guide is None:
+            return
+        self._guide = None
+        self._send_view({"type": "guide", "cmd": "stop"})
+        self.show_configuration(self.scene.start_configuration)
+        self.refresh()
+        self._stamp_live()
+
+    def _guide_message(self, kind: str, content: dict, buffers: list) -> None:
+        guide = self._guide
+        if guide is None:
+            return  # a move still on its way when guiding stopped
+        if kind == "guide-move":
+            self._send_view(*guide.move(content))
+        elif kind == "guide-end":
+            end = guide.end(content, buffers)
+            self.stop_guide()
+            self.message = ""
+            guide.on_end(end)
+        else:
+            self.stop_guide()
+            if guide.on_cancel is not None:
+                guide.on_cancel()
 
     def _flush(self) -> None:
         if self._pending:
@@ -663,7 +771,7 @@ class Scene3D:
             return
         self._caption.value = self._caption_html()
         self.replay_button.disabled = self.animation is None
-        if self.mode == "static" and isinstance(self._view, viewer_widget_class()):
+        if self.mode == "static" and not self._view.src:
             self._flush()
         elif self.mode == "static":  # the live viewer died: switch to the notebook viewer
             self._view = self._make_view()

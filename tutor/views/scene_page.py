@@ -8,10 +8,11 @@ and feeds it the scene over the widget's comm.
 
 The HTML, the page's script and the widget's script are static files in
 ``tutor/views/static/`` (``scene3d_page.html``, ``scene3d_page.js``,
-``scene3d_view.js``; ``scene3d_live.html`` for the live server's page, and
+``scene3d_view.js``; ``scene3d_live.html`` for the live server's page;
 ``scene3d_wheel.js`` in both pages: the wheel scrolls the page until the view is
-clicked), read with :mod:`importlib.resources`. meshcat's own viewer
-script comes from the installed meshcat package (it works offline).
+clicked; ``guide.js`` in both pages: guiding the arm with one's own hand), read
+with :mod:`importlib.resources`. meshcat's own viewer script comes from the installed
+meshcat package (it works offline).
 """
 
 from __future__ import annotations
@@ -82,9 +83,10 @@ def live_page_url(web_url: str, scene_id: str) -> str:
 
 
 def live_page() -> str:
-    """The live viewer page (``scene3d_live.html`` with the wheel's script in it); the
-    page reads its scene id from its own address."""
-    return static_text("scene3d_live.html").replace("{{wheel}}", static_text("scene3d_wheel.js"))
+    """The live viewer page (``scene3d_live.html`` with the wheel's and the guide's
+    scripts in it); the page reads its scene id from its own address."""
+    text = static_text("scene3d_live.html").replace("{{wheel}}", static_text("scene3d_wheel.js"))
+    return text.replace("{{guide}}", static_text("guide.js"))
 
 
 @lru_cache(maxsize=8)
@@ -133,7 +135,9 @@ def page(title: str, data: str, legend: str, caption: str) -> str:
         "overlay": overlay,
         "data": data,
         "viewer": _viewer_js(),
-        "script": static_text("scene3d_wheel.js") + static_text("scene3d_page.js"),
+        "script": static_text("scene3d_wheel.js")
+        + static_text("scene3d_page.js")
+        + static_text("guide.js"),
     }
     # one pass over the template: the data inserted is never searched for slots
     return _SLOT.sub(lambda m: slots[m[1]], static_text("scene3d_page.html"))
@@ -146,11 +150,14 @@ def viewer_widget_class():
     import traitlets
 
     class SceneView(anywidget.AnyWidget):
-        """meshcat's viewer in an iframe fed over the widget's comm: the whole scene
-        when a browser opens it, then only the changes (the camera stays put)."""
+        """meshcat's viewer in an iframe: the live server's page at ``src``, or ``page``
+        fed over the widget's comm (the whole scene when a browser opens it, then only
+        the changes: the camera stays put). Either way the widget passes the guide's
+        messages between the page and the kernel (:mod:`tutor.views.scene_guide`)."""
 
         _esm = static_text("scene3d_view.js")
         height = traitlets.Int(480).tag(sync=True)
         page = traitlets.Unicode("").tag(sync=True)
+        src = traitlets.Unicode("").tag(sync=True)
 
     return SceneView

@@ -1,13 +1,21 @@
 // The notebook's 3-D viewer (anywidget ESM of tutor/views/scene_page.py): meshcat's
-// page in an iframe, fed over the widget's comm. On (re)load it says hello; the kernel
-// answers with the whole scene for this view id, then sends only what changed. After
-// each batch it records data-updates, data-applied-at and data-painted-at on the view.
+// page in an iframe. Static (the model's `page`): the page is fed over the widget's comm;
+// on (re)load it says hello, the kernel answers with the whole scene for this view id,
+// then sends only what changed; after each batch it records data-updates,
+// data-applied-at and data-painted-at on the view. Live (the model's `src`): the frame
+// shows the live server's page, which gets the scene from its own websocket.
+// Both: the guide's messages go kernel -> widget -> frame (postMessage) and
+// frame -> widget -> kernel (window.parent.postMessage({lfd: "guide", ...})), see
+// tutor/views/scene_guide.py; only messages from this view's own frame are passed on.
 function render({ model, el }) {
   const id = Math.random().toString(36).slice(2);
   const frame = document.createElement("iframe");
+  const src = model.get("src");
   frame.style.width = "100%";
   frame.style.height = model.get("height") + "px";
   frame.style.border = "1px solid #ccc";
+  frame.setAttribute("allow", "gamepad");
+  frame.title = "The 3-D view of the robot, the tray and the bin";
   el.classList.add("lfd-scene3d-view");
   el.dataset.updates = "0";
   let ready = false;
@@ -32,15 +40,37 @@ function render({ model, el }) {
       })
       .catch((err) => { el.dataset.error = String(err); });
   };
+  // a guide message for the page: after the scene updates sent before it (static), the
+  // links' placements as an ArrayBuffer of their own
+  const toFrame = (msg, buffers) => {
+    const copy = (buffers || []).map((b) => (b instanceof ArrayBuffer
+      ? b.slice(0)
+      : b.buffer.slice(b.byteOffset, b.byteOffset + b.byteLength)));
+    const post = () => {
+      if (frame.contentWindow) frame.contentWindow.postMessage({ lfd: "guide", msg, buffers: copy }, "*");
+    };
+    if (src) post(); else chain = chain.then(post);
+  };
   const onMsg = (msg, buffers) => {
     if (msg.type === "full" && msg.to === id) { ready = true; apply(buffers); }
     else if (msg.type === "update" && ready) { apply(buffers); }
+    else if (msg.type === "guide") { toFrame(msg, buffers); }
+  };
+  const fromFrame = (event) => {
+    if (event.source !== frame.contentWindow) return;
+    const data = event.data;
+    if (!data || data.lfd !== "guide" || typeof data.msg !== "object") return;
+    model.send(data.msg, undefined, data.buffers || []);
   };
   model.on("msg:custom", onMsg);
+  window.addEventListener("message", fromFrame);
   // (re)loaded, e.g. when the page moves the output: ask for the whole scene again
   frame.addEventListener("load", () => { ready = false; model.send({ type: "hello", id: id }); });
-  frame.srcdoc = model.get("page");
+  if (src) frame.src = src; else frame.srcdoc = model.get("page");
   el.appendChild(frame);
-  return () => model.off("msg:custom", onMsg);
+  return () => {
+    model.off("msg:custom", onMsg);
+    window.removeEventListener("message", fromFrame);
+  };
 }
 export default { render };
