@@ -62,7 +62,7 @@ def test_a_guided_demonstration_counts_its_duration_and_setup(own, task):
     assert not own.guiding and own.run.n_demos == 1
     demo = own.run.attempt.demos[-1]
     assert demo.given == "own"
-    np.testing.assert_allclose(np.asarray(demo.recording), raw, atol=1e-6)
+    np.testing.assert_allclose(np.asarray(demo.recording), raw, atol=6e-5)  # kept to 0.1 mm
     assert demo.condition == tuple(task.conditions[45])
     spent = own.run.elapsed - before
     duration = raw[-1, 0] - raw[0, 0]
@@ -99,7 +99,7 @@ def test_the_page_cancelling_ends_guiding_without_a_demo(own):
         (lambda r: r[:1], "sample"),
         (lambda r: np.vstack([r[:60], r[60:] + [0, 0.4, 0, 0, 0]]), "jump"),
         (lambda r: r * [1, 4, 4, 1, 1], "reach"),
-        (lambda r: r * [5, 1, 1, 1, 1], "minutes|seconds|long"),
+        (lambda r: r * [1200 / r[-1, 0], 1, 1, 1, 1], "minutes|seconds|long"),
     ],
     ids=["nan", "never-closes", "never-opens", "one-sample", "jump", "out-of-reach", "20-min"],
 )
@@ -120,7 +120,7 @@ def test_a_recording_the_tutor_cannot_use_is_refused_and_nothing_changes(
 
 def test_a_recording_that_does_not_fit_the_clock_is_refused(own, task):
     raw = steady_hand(task, 50, np.random.default_rng(2))
-    own.run.spend(own.run.cap - 40.0)  # less than the demo and RF's replay need
+    own.run.spend(own.run.cap - 30.0)  # less than the demo and RF's replay need
     before = _state(own)
     own.select(50)
     own.guide()
