@@ -30,7 +30,7 @@ def task():
 def own(task, monkeypatch, tmp_path):
     monkeypatch.delenv("TUTOR_HAND", raising=False)
     scene = Scene3D(task=task, mode="static")
-    scene.widget  # the view as a browser would have it
+    assert scene.widget is not None  # the view as a browser would have it
     return PickPlaceTutor("RF", task=task, scene3d=scene, seed=3, session_file=tmp_path / "rf.json")
 
 
@@ -103,9 +103,7 @@ def test_the_page_cancelling_ends_guiding_without_a_demo(own):
     ],
     ids=["nan", "never-closes", "never-opens", "one-sample", "jump", "out-of-reach", "20-min"],
 )
-def test_a_recording_the_tutor_cannot_use_is_refused_and_nothing_changes(
-    own, task, spoil, words
-):
+def test_a_recording_the_tutor_cannot_use_is_refused_and_nothing_changes(own, task, spoil, words):
     own.guide_as_steady_hand(30)
     before = _state(own)
     saved = own.session_file.read_bytes()

@@ -39,9 +39,9 @@ import numpy as np
 from ..errors import InvalidFileError, InvalidParameterError, TutorError
 from ..framework.wording import percent, plural
 from ..paper import PAPER_MEAN_ETA, PAPER_THIRD_RUN_ETA
+from ..robot.follow import HandFollower
 from ..runtime import headless
 from ..tasks.pickplace import PickPlaceTask
-from ..robot.follow import HandFollower
 from ..tasks.pickplace_protocol import PickPlaceRun
 from ..tasks.recording import steady_hand
 from .app import TutorApp, guarded
@@ -83,6 +83,8 @@ def _set(obj, name: str, value) -> None:
     """Set a widget trait only when it changes (each change is a message to the browser)."""
     if getattr(obj, name) != value:
         setattr(obj, name, value)
+
+
 MISTAKES = {"no mistake": None, "wrong plant": "wrong_plant", "sloppy grab": "sloppy_grab"}
 
 
