@@ -177,6 +177,7 @@ HAND_SOURCES = {
     "plan": "your educator's class plan sets it",
     "env": f"your educator set it ({HAND_ENV})",
     "default": "the default",
+    "no-view": "there is no 3-D view to guide the arm in",
 }
 
 

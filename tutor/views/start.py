@@ -667,6 +667,8 @@ class PickPlaceExperiment(StartForm):
     def _hand_choice(self) -> tuple[str, str]:
         """(hand, source) the runs would use: the plan's, else the checkbox's when the
         trainee changed it, else ``TUTOR_HAND`` or the default."""
+        if not self.scene3d:  # made with scene3d=False: there is nothing to guide in
+            return "guided", "no-view"
         ticked = CHECKBOX_HANDS[bool(self.guided_box.value)]
         explicit = None if ticked == self._unasked_hand else ticked
         plan_hand = self._plan_hand()
@@ -684,7 +686,7 @@ class PickPlaceExperiment(StartForm):
         """The hand passed to each run's tutor: the one the trainee or the plan chose;
         None leaves it to the tutor (``TUTOR_HAND``, else the default, as here)."""
         code, source = self._hand_choice()
-        return code if source in ("explicit", "plan") else None
+        return code if source in ("explicit", "plan", "no-view") else None
 
     def hand_line(self) -> str:
         """The summary's sentence about the hand, e.g. "The tutor guides the arm for you
@@ -696,7 +698,8 @@ class PickPlaceExperiment(StartForm):
 
     def _show_hand_field(self) -> None:
         """The checkbox shows only while the plan does not set the hand."""
-        self.guided_box.layout.display = "none" if self._plan_hand() else None
+        hidden = self._plan_hand() or not self.scene3d
+        self.guided_box.layout.display = "none" if hidden else None
 
     def _condition_changed(self) -> None:
         """Say "Choose your condition" beside the buttons while none is chosen."""
