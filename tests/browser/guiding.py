@@ -9,6 +9,7 @@ frame (metres); :meth:`Guide.screen` turns them into page pixels with the page's
 from __future__ import annotations
 
 import time
+from functools import lru_cache
 
 import numpy as np
 
@@ -28,6 +29,14 @@ GAMEPAD = """
 
 #: how high (m, above the grasp point) the scripted person lifts the plant to carry it
 LIFT = 0.12
+
+
+@lru_cache(maxsize=1)
+def pickplace_scene():
+    """The bundled pick-and-place scene (where the plants and the bin are)."""
+    from tutor.tasks.pickplace import load_scene
+
+    return load_scene()
 
 
 class Guide:

@@ -22,7 +22,7 @@ from tests.browser.conftest import ARTIFACTS, open_and_run_all, start_notebook_k
 
 pytestmark = pytest.mark.browser
 
-VIEW = ".lfd-scene3d-view"
+VIEW = ".lfd-scene3d-view, .lfd-scene3d-live"
 
 #: a gamepad the page can poll: the test moves its sticks and presses its buttons
 GAMEPAD = """
@@ -214,9 +214,7 @@ def test_guide_with_mouse_keys_and_gamepad_in_the_notebook_viewer(jupyterlab, wo
     guide.press_button(0)
     assert guide.state()["grip"] == 0
     # the arm was drawn where the handle went: the hand marker follows the tool
-    guide.frame.wait_for_function(
-        "() => window.lfdGuideLatency.length > 5", timeout=30_000
-    )
+    guide.frame.wait_for_function("() => window.lfdGuideLatency.length > 5", timeout=30_000)
     hand = guide.frame.evaluate(
         "() => viewer.scene_tree.find(['meshcat', 'lfd', 'hand']).object.position.toArray()"
     )

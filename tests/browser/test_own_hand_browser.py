@@ -39,7 +39,7 @@ from tests.browser.conftest import (
     watch_errors,
     watch_network,
 )
-from tests.browser.guiding import GAMEPAD, Guide
+from tests.browser.guiding import GAMEPAD, Guide, pickplace_scene
 
 pytestmark = pytest.mark.browser
 
@@ -91,12 +91,6 @@ def _write_notebook(folder) -> None:
     nbformat.write(nb, folder / NOTEBOOK)
 
 
-def _scene():
-    from tutor.tasks.pickplace import PickPlaceTask
-
-    return PickPlaceTask().scene
-
-
 def _form(page, condition: str):
     return page.locator(".lfd-start-form").nth(CONDITIONS.index(condition))
 
@@ -138,7 +132,7 @@ def _run_file(session_root, trainee: str, condition: str) -> dict:
 
 def teach_five(page, condition: str, trainee: str, figures: dict, axe_name: str | None = None):
     """Start ``condition``'s form and guide five demos, one to each of PLANTS."""
-    scene = _scene()
+    scene = pickplace_scene()
     tutor = _start(page, condition, trainee)
     view = tutor.locator(".lfd-scene3d")
     view.wait_for(timeout=WIDGET_TIMEOUT_MS)
@@ -176,7 +170,7 @@ def check_run_file(record: dict, condition: str, figures: dict) -> None:
     run = RunRecord.from_dict(record)
     demos = run.current.demos
     assert run.condition == condition and len(demos) == 5
-    scene = _scene()
+    scene = pickplace_scene()
     for demo, plant in zip(demos, PLANTS, strict=True):
         assert demo.given == "own"
         np.testing.assert_allclose(demo.condition, scene.plant_positions[plant], atol=1e-9)

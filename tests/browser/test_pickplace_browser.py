@@ -1,4 +1,5 @@
-"""Drive notebook 03 (pick and place, BF) in JupyterLab with real mouse clicks.
+"""Drive notebook 03 (pick and place, BF) in JupyterLab with real mouse clicks, with the
+guided hand (the start form's "The tutor guides the arm for me" ticked).
 
 - Demonstrate to the 3-D view updated: the page records when the click happened and the
   viewer records when it applied the update the click caused (the notebook viewer's
@@ -150,6 +151,9 @@ def test_demonstrate_updates_the_3d_view_fast_and_the_cap_holds(
     buttons.locator("button.mod-active", has_text="BF").wait_for(timeout=WIDGET_TIMEOUT_MS)
     form.locator(".lfd-start-name input").click()
     page.keyboard.type(BROWSER_TRAINEE)
+    # this trainee has the tutor guide the arm (the own hand has its own tests)
+    form.locator(".lfd-start-hand input").click()
+    assert form.locator(".lfd-start-hand input").is_checked()
     page.screenshot(path=str(artifacts / "pickplace_start_form.png"))
     form.locator(".lfd-start-go").click()
     tutor = _tutor(page, 1)

@@ -1,7 +1,7 @@
 """Notebook 03 in JupyterLab: three runs, each with its own 3-D view; the wheel's focus rule.
 
-Three runs of one notebook (BF), one demonstration each to a different plant, with real
-clicks. After the third, each run's 3-D view still shows its own demonstration (its blue
+Three runs of one notebook (BF), one demonstration each to a different plant, guided with
+the trainee's own hand (real clicks and drags). After the third, each run's 3-D view still shows its own demonstration (its blue
 trail passes its own plant, not the others' runs' plants, and is the trail it showed
 right after its demo) and its caption, and each run's Replay restarts that run's own
 clip (the same keys it loaded after its demo, from the start).
@@ -21,6 +21,7 @@ import time
 import pytest
 
 from tests.browser.conftest import open_and_run_all, start_notebook_kernel
+from tests.browser.guiding import Guide, pickplace_scene
 from tests.browser.test_pickplace_browser import WIDGET_TIMEOUT_MS, _n_demos, _tutor
 
 pytestmark = pytest.mark.browser
@@ -143,9 +144,14 @@ def _teach_one(page, run: int, plant: int, finish: bool) -> tuple[RunView, dict]
     )
     loaded = view.js(RECORD_CLIP_KEYS)
     view.tutor.locator(".widget-gridbox button").nth(plant).click()
-    before = view.updates()
-    view.tutor.get_by_role("button", name="Demonstrate", exact=True).click()
-    view.wait_updates(before + 1)
+    # the trainee guides the arm there with their own hand (the mouse: drags, Space, Enter)
+    view.tutor.locator(".lfd-guide-button").click()
+    view.scene.scroll_into_view_if_needed()
+    guide = Guide(page, view.scene, timeout_ms=WIDGET_TIMEOUT_MS)
+    guide.wait_state("armed", timeout_ms=WIDGET_TIMEOUT_MS)
+    scene = pickplace_scene()
+    guide.pick_and_place(scene.plant_positions[plant], scene.release_point)
+    view.tutor.get_by_text(re.compile(r"demonstrations: 1(?!\d)")).wait_for(timeout=120_000)
     keys = view.wait_keys(loaded + 1)
     assert keys[1] and keys[2] > 1, f"run {run}'s demo did not animate the arm: {keys}"
     assert _n_demos(view.tutor) == 1
@@ -159,9 +165,7 @@ def _teach_one(page, run: int, plant: int, finish: bool) -> tuple[RunView, dict]
     return view, seen
 
 
-def test_three_runs_keep_their_own_view_and_the_wheel_scrolls_the_page(
-    page, jupyterlab, artifacts
-):
+def test_three_runs_keep_their_own_view_and_the_wheel_scrolls_the_page(page, jupyterlab, artifacts):
     url, token = jupyterlab
     start_notebook_kernel(url, token, NOTEBOOK, fresh=True)  # not the last test's kernel
     open_and_run_all(page, url, token, NOTEBOOK, WIDGET_TIMEOUT_MS)

@@ -16,7 +16,8 @@ function render({ model, el }) {
   frame.style.border = "1px solid #ccc";
   frame.setAttribute("allow", "gamepad");
   frame.title = "The 3-D view of the robot, the tray and the bin";
-  el.classList.add("lfd-scene3d-view");
+  // the notebook viewer, or the live server's page (the browser tests tell them apart)
+  el.classList.add(src ? "lfd-scene3d-live" : "lfd-scene3d-view");
   el.dataset.updates = "0";
   let ready = false;
   let chain = Promise.resolve();
