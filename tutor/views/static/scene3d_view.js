@@ -1,7 +1,9 @@
 // The notebook's 3-D viewer (anywidget ESM of tutor/views/scene_page.py): meshcat's
 // page in an iframe, fed over the widget's comm. On (re)load it says hello; the kernel
 // answers with the whole scene for this view id, then sends only what changed. After
-// each batch it records data-updates, data-applied-at and data-painted-at on the view.
+// each batch it records data-updates, data-applied-at and data-painted-at on the view. It
+// tells the page whether the view is on screen ('lfd-visible', from its own
+// IntersectionObserver) and passes on the kernel's "working" line ('lfd-working').
 function render({ model, el }) {
   const id = Math.random().toString(36).slice(2);
   const frame = document.createElement("iframe");
@@ -32,15 +34,33 @@ function render({ model, el }) {
       })
       .catch((err) => { el.dataset.error = String(err); });
   };
+  // the page draws nothing while the view is off screen (scene3d_render.js): tell it
+  let seen = true;
+  const post = (data) => { if (frame.contentWindow) frame.contentWindow.postMessage(data, "*"); };
+  const observer = "IntersectionObserver" in window
+    ? new IntersectionObserver((entries) => {
+      seen = entries[entries.length - 1].isIntersecting;
+      post({ type: "lfd-visible", visible: seen });
+    })
+    : null;
+  if (observer) observer.observe(el);
   const onMsg = (msg, buffers) => {
     if (msg.type === "full" && msg.to === id) { ready = true; apply(buffers); }
     else if (msg.type === "update" && ready) { apply(buffers); }
+    else if (msg.type === "working") { post({ type: "lfd-working", text: msg.text || "" }); }
   };
   model.on("msg:custom", onMsg);
   // (re)loaded, e.g. when the page moves the output: ask for the whole scene again
-  frame.addEventListener("load", () => { ready = false; model.send({ type: "hello", id: id }); });
+  frame.addEventListener("load", () => {
+    ready = false;
+    post({ type: "lfd-visible", visible: seen });
+    model.send({ type: "hello", id: id });
+  });
   frame.srcdoc = model.get("page");
   el.appendChild(frame);
-  return () => model.off("msg:custom", onMsg);
+  return () => {
+    model.off("msg:custom", onMsg);
+    if (observer) observer.disconnect();
+  };
 }
 export default { render };
