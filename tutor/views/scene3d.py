@@ -698,8 +698,7 @@ class Scene3D:
         """
         if not (isinstance(text, str) and 0 < len(text.strip()) <= 200):
             raise InvalidParameterError(
-                f"the working line must be a non-empty text of at most 200 characters, "
-                f"got {text!r}"
+                f"the working line must be a text of 1 to 200 characters, got {text!r}"
             )
         self._working = text.strip()
         self._show_working()
