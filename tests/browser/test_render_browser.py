@@ -130,7 +130,11 @@ def _wait_selected(page, plant: int, timeout: float = 60.0) -> float:
         if seen[0] is not None and seen[1] is not None and seen[1] >= seen[0]:
             return float(seen[1] - seen[0])
         time.sleep(0.01)
-    raise AssertionError(f"tray button {plant} was not drawn as selected within {timeout} s")
+    page.screenshot(path=str(ARTIFACTS / f"render_not_selected_{plant}.png"))
+    raise AssertionError(
+        f"tray button {plant} was not drawn as selected within {timeout} s (clicked, "
+        f"selected at: {seen})"
+    )
 
 
 @pytest.mark.parametrize("mode", ["static", "live"])
@@ -142,7 +146,11 @@ def test_plant_clicked_right_after_a_demo_highlights_fast(page, jupyterlab, work
     open_and_run_all(page, url, token, notebook, WIDGET_TIMEOUT_MS)
     # this notebook's tutor (JupyterLab may reopen the other test's notebook in a hidden tab)
     tutor = page.locator(f"{TUTOR} >> visible=true").first
-    tutor.wait_for(timeout=WIDGET_TIMEOUT_MS)
+    try:
+        tutor.wait_for(timeout=WIDGET_TIMEOUT_MS)
+    except Exception:
+        page.screenshot(path=str(ARTIFACTS / f"render_{mode}_timeout.png"))
+        raise
     view = View(tutor)
     assert view.mode == mode
     view.scene.scroll_into_view_if_needed()
