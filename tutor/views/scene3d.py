@@ -71,6 +71,7 @@ status : (100,) of str
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import html
 import uuid
@@ -109,6 +110,7 @@ __all__ = [
     "SceneRecorder",
     "AnimationInfo",
     "STATUS_COLOURS",
+    "WORKING",
     "HAND_OPEN",
     "HAND_CLOSED",
     "choose_mode",
@@ -123,6 +125,8 @@ STATUS_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
 CAMERA_POSITION = (0.75, -0.7, 0.62)
 #: The path of the live viewer's "update applied" stamp (its page handles it; not drawn).
 STAMP = "/lfd-stamp"
+#: What the view says while the kernel learns from a demonstration (:meth:`Scene3D.working`).
+WORKING = "Working: the robot is learning from your demo..."
 
 
 @dataclass(frozen=True)
@@ -234,6 +238,7 @@ class Scene3D:
         self._shown_key = None
         self._trails: dict[str, list[bytes]] = {}  # what each trail group shows (digests)
         self._stamp = 0  # updates sent to the live viewer (it reports the last applied)
+        self._working = ""  # the "working" line shown until the next refresh
         self.replay_button = None
         self._guide: Guide | None = None
         self._draw_static_scene()  # streams to this scene on the live server as drawn
@@ -741,6 +746,11 @@ class Scene3D:
         parts.append(f"<div style='font-size:12px;color:#555'>{how}</div>")
         if self.message:
             parts.append(f"<div class='lfd-message'>{html.escape(self.message)}</div>")
+        if self._working:
+            parts.append(
+                "<div class='lfd-working' role='status' style='font-weight:bold'>"
+                f"&#8987; {html.escape(self._working)}</div>"
+            )
         return "".join(parts)
 
     @property
@@ -766,16 +776,58 @@ class Scene3D:
         return self._widget
 
     def refresh(self) -> None:
-        """Update the widget: the caption, and the changes for the notebook viewer."""
+        """Update the widget: the caption (the :meth:`working` line goes), and the changes
+        for the notebook viewer."""
         if self._widget is None:
+            self._working = ""
             return
+        was_working, self._working = self._working, ""
         self._caption.value = self._caption_html()
+        if was_working and isinstance(self._view, viewer_widget_class()):
+            self._view.send({"type": "working", "text": ""})
         self.replay_button.disabled = self.animation is None
         if self.mode == "static" and not self._view.src:
             self._flush()
         elif self.mode == "static":  # the live viewer died: switch to the notebook viewer
             self._view = self._make_view()
             self._widget.children = (self._header, self._view)
+
+    def working(self, text: str = WORKING) -> None:
+        """Say ``text`` over the view now (the caption's line and, in the notebook viewer,
+        a line over the picture) until the next :meth:`refresh`.
+
+        Call it before a slow step (a demonstration the robot learns from, a batch of
+        tests): the line reaches the browser at once, while the step runs.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``text`` is not a non-empty string of at most 200 characters.
+        """
+        if not (isinstance(text, str) and 0 < len(text.strip()) <= 200):
+            raise InvalidParameterError(
+                f"the working line must be a text of 1 to 200 characters, got {text!r}"
+            )
+        self._working = text.strip()
+        self._show_working()
+
+    @contextlib.contextmanager
+    def busy(self, text: str = WORKING):
+        """``with scene.busy(): ...``: :meth:`working` for the block; the line goes when
+        the block ends, even if the block drew nothing (or raised)."""
+        self.working(text)
+        try:
+            yield self
+        finally:
+            if self._working:
+                self.refresh()
+
+    def _show_working(self) -> None:
+        if self._widget is None:
+            return
+        self._caption.value = self._caption_html()
+        if isinstance(self._view, viewer_widget_class()):
+            self._view.send({"type": "working", "text": self._working})
 
     def _ipython_display_(self):
         from IPython.display import display

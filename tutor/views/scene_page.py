@@ -8,10 +8,11 @@ and feeds it the scene over the widget's comm.
 
 The HTML, the page's script and the widget's script are static files in
 ``tutor/views/static/`` (``scene3d_page.html``, ``scene3d_page.js``,
-``scene3d_view.js``; ``scene3d_live.html`` for the live server's page;
-``scene3d_wheel.js`` in both pages: the wheel scrolls the page until the view is
-clicked; ``guide.js`` in both pages: guiding the arm with one's own hand), read
-with :mod:`importlib.resources`. meshcat's own viewer script comes from the installed
+``scene3d_view.js``; ``scene3d_live.html`` for the live server's page, and in both
+pages ``scene3d_wheel.js``, the wheel scrolls the page until the view is clicked,
+``scene3d_render.js``, the view draws on demand at a capped, adaptive frame rate and
+pauses off screen, and ``guide.js``, guiding the arm with one's own hand), read with
+:mod:`importlib.resources`. meshcat's own viewer script comes from the installed
 meshcat package (it works offline).
 """
 
@@ -83,10 +84,14 @@ def live_page_url(web_url: str, scene_id: str) -> str:
 
 
 def live_page() -> str:
-    """The live viewer page (``scene3d_live.html`` with the wheel's and the guide's
-    scripts in it); the page reads its scene id from its own address."""
-    text = static_text("scene3d_live.html").replace("{{wheel}}", static_text("scene3d_wheel.js"))
-    return text.replace("{{guide}}", static_text("guide.js"))
+    """The live viewer page (``scene3d_live.html`` with the wheel's, the renderer's and
+    the guide's scripts in it); the page reads its scene id from its own address."""
+    slots = {
+        "wheel": static_text("scene3d_wheel.js"),
+        "render": static_text("scene3d_render.js"),
+        "guide": static_text("guide.js"),
+    }
+    return _SLOT.sub(lambda m: slots[m[1]], static_text("scene3d_live.html"))
 
 
 @lru_cache(maxsize=8)
@@ -135,6 +140,7 @@ def page(title: str, data: str, legend: str, caption: str) -> str:
         "overlay": overlay,
         "data": data,
         "viewer": _viewer_js(),
+        "render": static_text("scene3d_render.js"),
         "script": static_text("scene3d_wheel.js")
         + static_text("scene3d_page.js")
         + static_text("guide.js"),

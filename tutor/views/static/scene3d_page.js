@@ -1,19 +1,26 @@
 // The static 3-D page's own script (after meshcat's viewer script): builds the viewer,
 // unpacks the scene packed into the page's data scripts, and lets the notebook widget
 // apply more commands (window.lfdApply) and set the caption (window.lfdCaption).
-// tutor/views/scene_page.py puts it into scene3d_page.html.
-var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
-// Apply gzipped, length-prefixed msgpack commands, in order.
+// tutor/views/scene_page.py puts it into scene3d_page.html, after scene3d_render.js (the
+// viewer draws on demand, capped; see there).
+var viewer = window.lfdViewer(document.getElementById("meshcat-pane"));
+// Apply gzipped, length-prefixed msgpack commands, in order (in slices that yield to input).
 async function lfdApply(gz) {
   const stream = new Blob([gz]).stream().pipeThrough(new DecompressionStream("gzip"));
   const buf = new Uint8Array(await new Response(stream).arrayBuffer());
   const view = new DataView(buf.buffer);
+  const commands = [];
   let i = 0;
   while (i < buf.length) {
     const n = view.getUint32(i);
-    viewer.handle_command_bytearray(buf.slice(i + 4, i + 4 + n));
+    commands.push(buf.slice(i + 4, i + 4 + n));
     i += 4 + n;
   }
+  await window.lfdRender.applyCommands(
+    commands,
+    (c) => viewer.handle_command_bytearray(c),
+    buf.length > window.lfdRender.BIG_BYTES
+  );
 }
 function lfdCaption(text) {
   const el = document.getElementById("lfd-caption");

@@ -7,6 +7,8 @@
 // Both: the guide's messages go kernel -> widget -> frame (postMessage) and
 // frame -> widget -> kernel (window.parent.postMessage({lfd: "guide", ...})), see
 // tutor/views/scene_guide.py; only messages from this view's own frame are passed on.
+// It tells the page whether the view is on screen ('lfd-visible', from its own
+// IntersectionObserver) and passes on the kernel's "working" line ('lfd-working').
 function render({ model, el }) {
   const id = Math.random().toString(36).slice(2);
   const frame = document.createElement("iframe");
@@ -41,6 +43,16 @@ function render({ model, el }) {
       })
       .catch((err) => { el.dataset.error = String(err); });
   };
+  // the page draws nothing while the view is off screen (scene3d_render.js): tell it
+  let seen = true;
+  const post = (data) => { if (frame.contentWindow) frame.contentWindow.postMessage(data, "*"); };
+  const observer = "IntersectionObserver" in window
+    ? new IntersectionObserver((entries) => {
+      seen = entries[entries.length - 1].isIntersecting;
+      post({ type: "lfd-visible", visible: seen });
+    })
+    : null;
+  if (observer) observer.observe(el);
   // a guide message for the page: after the scene updates sent before it (static), the
   // links' placements as an ArrayBuffer of their own
   const toFrame = (msg, buffers) => {
@@ -56,6 +68,7 @@ function render({ model, el }) {
     if (msg.type === "full" && msg.to === id) { ready = true; apply(buffers); }
     else if (msg.type === "update" && ready) { apply(buffers); }
     else if (msg.type === "guide") { toFrame(msg, buffers); }
+    else if (msg.type === "working") { post({ type: "lfd-working", text: msg.text || "" }); }
   };
   const fromFrame = (event) => {
     if (event.source !== frame.contentWindow) return;
@@ -66,12 +79,17 @@ function render({ model, el }) {
   model.on("msg:custom", onMsg);
   window.addEventListener("message", fromFrame);
   // (re)loaded, e.g. when the page moves the output: ask for the whole scene again
-  frame.addEventListener("load", () => { ready = false; model.send({ type: "hello", id: id }); });
+  frame.addEventListener("load", () => {
+    ready = false;
+    post({ type: "lfd-visible", visible: seen });
+    model.send({ type: "hello", id: id });
+  });
   if (src) frame.src = src; else frame.srcdoc = model.get("page");
   el.appendChild(frame);
   return () => {
     model.off("msg:custom", onMsg);
     window.removeEventListener("message", fromFrame);
+    if (observer) observer.disconnect();
   };
 }
 export default { render };
