@@ -39,7 +39,8 @@ NOTEBOOK = {
                 "from tutor.views.pickplace_app import PickPlaceTutor\n"
                 "from tutor.views.scene3d import Scene3D\n"
                 "scene = Scene3D(mode='static', height=420)\n"
-                "tutor = PickPlaceTutor('RF', scene3d=scene, seed=1, task=scene.task, hand='guided')\n"
+                "tutor = PickPlaceTutor('RF', scene3d=scene, seed=1, task=scene.task,\n"
+                "                       hand='guided')\n"
                 "tutor"
             ),
         }

@@ -1,8 +1,8 @@
 """Notebook 03 in JupyterLab: three runs, each with its own 3-D view; the wheel's focus rule.
 
 Three runs of one notebook (BF), one demonstration each to a different plant, guided with
-the trainee's own hand (real clicks and drags). After the third, each run's 3-D view still shows its own demonstration (its blue
-trail passes its own plant, not the others' runs' plants, and is the trail it showed
+the trainee's own hand (real clicks and drags). After the third, each run's 3-D view still
+shows its own demonstration (its blue trail passes its own plant, not the others' runs' plants, and is the trail it showed
 right after its demo) and its caption, and each run's Replay restarts that run's own
 clip (the same keys it loaded after its demo, from the start).
 

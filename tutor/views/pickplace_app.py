@@ -29,6 +29,7 @@ and its button has the CSS class ``lfd-hint``); the hint is also said in words.
 
 from __future__ import annotations
 
+import contextlib
 import html
 import logging
 import time
@@ -315,8 +316,8 @@ class PickPlaceTutor(TutorApp):
         if plant is None:
             return  # a late end after a cancel: nothing is meant by it
         finished = self.run.attempt.finished
-        self._working("The robot is learning from your demonstration…")
-        self.run.demonstrate(plant, raw=end.raw, given="own", setup_seconds=end.setup_seconds)
+        with self._busy("The robot is learning from your demonstration…"):
+            self.run.demonstrate(plant, raw=end.raw, given="own", setup_seconds=end.setup_seconds)
         self.message = ""
         self._close_if_out_of_time()
         if self.run.attempt.finished != finished or self.message == "":
@@ -351,11 +352,11 @@ class PickPlaceTutor(TutorApp):
         end = {"type": "guide-end", "n": len(raw), "setup": SCRIPTED_SETUP_SECONDS}
         self.scene3d.receive(end, [raw.tobytes()])
 
-    def _working(self, text: str) -> None:
-        """Say on the 3-D view that a slow step runs (its next refresh clears it)."""
-        working = getattr(self.scene3d, "working", None)
-        if callable(working):
-            working(text)
+    def _busy(self, text: str):
+        """A context in which the 3-D view says ``text`` (:meth:`Scene3D.busy`), for a step
+        that takes a while; nothing without a view."""
+        busy = getattr(self.scene3d, "busy", None)
+        return busy(text) if callable(busy) else contextlib.nullcontext()
 
     # ---------------------------------------------------------------- actions
 
@@ -414,8 +415,8 @@ class PickPlaceTutor(TutorApp):
             mistake = MISTAKES[check_choice(self.mistake.value, "the mistake", tuple(MISTAKES))]
         finished = self.run.attempt.finished
         try:
-            self._working("The robot is learning from the demonstration…")
-            self.run.demonstrate(plant, mistake=mistake, rng=self.rng, given="guided")
+            with self._busy("The robot is learning from the demonstration…"):
+                self.run.demonstrate(plant, mistake=mistake, rng=self.rng, given="guided")
             self.message = ""
         except TutorError as exc:
             self.message = str(exc)
