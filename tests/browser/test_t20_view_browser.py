@@ -3,8 +3,9 @@
 Three runs of one notebook (BF), one demonstration each to a different plant, guided with
 the trainee's own hand (real clicks and drags). After the third, each run's 3-D view still
 shows its own demonstration (its blue trail passes its own plant, not the others' runs'
-plants, and is the trail it showed right after its demo) and its caption, and each run's Replay restarts that run's own
-clip (the same keys it loaded after its demo, from the start).
+plants, and is the trail it showed right after its demo) and its caption, and each run's
+Replay restarts that run's own clip (the same keys it loaded after its demo, from the
+start).
 
 Then the wheel over a 3-D view: unfocused, it scrolls the notebook and the camera does
 not move (a hint says "Click to zoom with the wheel" on hover); after a click in the view
