@@ -109,9 +109,14 @@ def _start(page, condition: str, trainee: str):
     page.keyboard.type(trainee)
     form.locator(".lfd-start-go").click()
     tutor = form.locator(TUTOR).filter(has_text=re.compile(r"\brun 1\b")).first
-    tutor.wait_for(timeout=WIDGET_TIMEOUT_MS)
+    try:
+        tutor.wait_for(timeout=WIDGET_TIMEOUT_MS)
+    except Exception:
+        page.screenshot(path=str(ARTIFACTS / f"own_hand_{trainee}_no_run.png"))
+        raise
     assert tutor.get_by_role("button", name="Demonstrate", exact=True).count() == 0
-    assert tutor.locator("select").count() == 0  # no mistake menu: mistakes are their own
+    # no mistake menu: with their own hand, mistakes are the trainee's own
+    assert tutor.get_by_label("Mistake", exact=True).count() == 0
     return tutor
 
 
