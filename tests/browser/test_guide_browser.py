@@ -164,7 +164,7 @@ def _run(jupyterlab, workdir, page, mode: str, name: str):
     return guide, out
 
 
-def _check_recording(got, guide_states):
+def _check_recording(got):
     raw = np.array(got["raw"])
     assert raw.ndim == 2 and raw.shape[1] == 5 and len(raw) >= 40
     spacing = np.diff(raw[:, 0])
@@ -220,12 +220,7 @@ def test_guide_with_mouse_keys_and_gamepad_in_the_notebook_viewer(jupyterlab, wo
     guide.press_button(0, until=lambda s: s["grip"] == 0)
     assert guide.state()["grip"] == 0
     # the arm was drawn where the handle went: the hand marker follows the tool
-    guide.frame.wait_for_function(
-        "() => window.lfdGuideLatency.length > 5", timeout=30_000
-    )
-    hand = guide.frame.evaluate(
-        "() => viewer.scene_tree.find(['meshcat', 'lfd', 'hand']).object.position.toArray()"
-    )
+    guide.frame.wait_for_function("() => window.lfdGuideLatency.length > 5", timeout=30_000)
     time.sleep(1.0)  # the last move's answer
     hand = guide.frame.evaluate(
         "() => viewer.scene_tree.find(['meshcat', 'lfd', 'hand']).object.position.toArray()"
@@ -235,7 +230,7 @@ def test_guide_with_mouse_keys_and_gamepad_in_the_notebook_viewer(jupyterlab, wo
     n = guide.state()["samples"]
     page.keyboard.press("Enter")
     got = _wait_json(out)
-    raw = _check_recording(got, None)
+    raw = _check_recording(got)
     assert len(raw) >= n
     assert raw[:, 4].max() == 1 and raw[-1, 4] == 0  # closed, then opened
     assert np.allclose(raw[0, 1:4], h0 + [0, 0, 0], atol=0.03)  # from where the hand was
@@ -261,5 +256,5 @@ def test_guide_in_the_live_viewer_ends_with_the_gamepad(jupyterlab, workdir, pag
     guide.press_button(9, until=lambda s: s["state"] != "recording")  # start: ends
     got = _wait_json(out)
     assert got["mode"] == "live"
-    raw = _check_recording(got, None)
+    raw = _check_recording(got)
     assert raw[:, 4].max() == 1

@@ -40,6 +40,8 @@
   const SHADOW = ["meshcat", "lfd", "guide-shadow"];
   const latency = [];
   window.lfdGuideLatency = latency;
+  const roundTrip = []; // ms from a move sent to its answer received (the kernel's part)
+  window.lfdGuideRoundTrip = roundTrip;
   const gaps = []; // ms between the clock's ticks while recording (how busy the page is)
   window.lfdGuideTickGaps = gaps;
 
@@ -223,6 +225,7 @@
   function answered(msg, buffers) {
     if (!G.out || msg.seq !== G.out.seq) return;
     const sent = G.out.at;
+    roundTrip.push(performance.now() - sent);
     if (buffers && buffers[0]) showArm(msg, buffers[0]);
     requestAnimationFrame(() => latency.push(performance.now() - sent));
     G.out = null;
