@@ -242,7 +242,9 @@ def test_guide_with_mouse_keys_and_gamepad_in_the_notebook_viewer(jupyterlab, wo
 
 def test_guide_in_the_live_viewer_ends_with_the_gamepad(jupyterlab, workdir, page):
     guide, out = _run(jupyterlab, workdir, page, "live", "live")
-    assert "/lfd/" in (guide.element.get_attribute("src") or "")
+    src = guide.element.get_attribute("src") or ""
+    caption = page.locator(".lfd-scene3d").first.inner_text()
+    assert "/lfd/" in src, f"no live viewer: {caption}"
     box = guide.element.bounding_box()
     page.mouse.click(box["x"] + 40, box["y"] + 80)
     h0 = np.array(guide.state()["handle"])
