@@ -40,16 +40,17 @@ GAMEPAD = """
 def _notebook(mode: str, out: str) -> dict:
     source = (
         "import json\n"
-        "import numpy as np\n"
+        "import os\n"
         "from tutor.robot.follow import HandFollower\n"
         "from tutor.views.scene3d import Scene3D\n"
         f"scene = Scene3D(mode={mode!r}, height=460)\n"
         "follower = HandFollower.for_scene(scene.scene)\n"
         "def on_end(end):\n"
         "    raw = end.raw\n"
-        f"    with open({out!r}, 'w') as f:\n"
+        f"    with open({out + '.part'!r}, 'w') as f:\n"
         "        json.dump({'raw': raw.tolist(), 'setup': end.setup_seconds,\n"
         "                   'moves': moves[0], 'mode': scene.mode}, f)\n"
+        f"    os.replace({out + '.part'!r}, {out!r})\n"
         "moves = [0]\n"
         "step = follower.step\n"
         "def counted(*a):\n"
@@ -125,11 +126,16 @@ class Guide:
     def pad(self, script: str):
         self.frame.evaluate(f"() => {{ const pad = window.__lfdPad; {script}; }}")
 
-    def press_button(self, i):
+    def press_button(self, i, until=None, timeout=5.0):
+        """Press gamepad button ``i``, held until ``until(state)`` holds (as a person holds
+        a button until the view shows it took: a busy page polls the pad late)."""
         self.pad(f"pad.buttons[{i}].pressed = true; pad.buttons[{i}].value = 1")
-        time.sleep(0.3)
+        deadline = time.monotonic() + timeout
+        time.sleep(0.15)
+        while until is not None and not until(self.state()) and time.monotonic() < deadline:
+            time.sleep(0.05)
         self.pad(f"pad.buttons[{i}].pressed = false; pad.buttons[{i}].value = 0")
-        time.sleep(0.2)
+        time.sleep(0.3)
 
 
 def _wait_json(path, timeout=60.0) -> dict:
@@ -158,7 +164,7 @@ def _run(jupyterlab, workdir, page, mode: str, name: str):
     return guide, out
 
 
-def _check_recording(got, guide_states):
+def _check_recording(got):
     raw = np.array(got["raw"])
     assert raw.ndim == 2 and raw.shape[1] == 5 and len(raw) >= 40
     spacing = np.diff(raw[:, 0])
@@ -211,13 +217,10 @@ def test_guide_with_mouse_keys_and_gamepad_in_the_notebook_viewer(jupyterlab, wo
     guide.pad("pad.axes[0] = 0")
     s5 = guide.state()
     assert np.linalg.norm(np.array(s5["handle"][:2]) - s4["handle"][:2]) > 0.03
-    guide.press_button(0)
+    guide.press_button(0, until=lambda s: s["grip"] == 0)
     assert guide.state()["grip"] == 0
     # the arm was drawn where the handle went: the hand marker follows the tool
     guide.frame.wait_for_function("() => window.lfdGuideLatency.length > 5", timeout=30_000)
-    hand = guide.frame.evaluate(
-        "() => viewer.scene_tree.find(['meshcat', 'lfd', 'hand']).object.position.toArray()"
-    )
     time.sleep(1.0)  # the last move's answer
     hand = guide.frame.evaluate(
         "() => viewer.scene_tree.find(['meshcat', 'lfd', 'hand']).object.position.toArray()"
@@ -227,7 +230,7 @@ def test_guide_with_mouse_keys_and_gamepad_in_the_notebook_viewer(jupyterlab, wo
     n = guide.state()["samples"]
     page.keyboard.press("Enter")
     got = _wait_json(out)
-    raw = _check_recording(got, None)
+    raw = _check_recording(got)
     assert len(raw) >= n
     assert raw[:, 4].max() == 1 and raw[-1, 4] == 0  # closed, then opened
     assert np.allclose(raw[0, 1:4], h0 + [0, 0, 0], atol=0.03)  # from where the hand was
@@ -239,18 +242,21 @@ def test_guide_with_mouse_keys_and_gamepad_in_the_notebook_viewer(jupyterlab, wo
 
 def test_guide_in_the_live_viewer_ends_with_the_gamepad(jupyterlab, workdir, page):
     guide, out = _run(jupyterlab, workdir, page, "live", "live")
-    assert "/lfd/" in (guide.element.get_attribute("src") or "")
+    src = guide.element.get_attribute("src") or ""
+    caption = page.locator(".lfd-scene3d").first.inner_text()
+    assert "/lfd/" in src, f"no live viewer: {caption}"
     box = guide.element.bounding_box()
     page.mouse.click(box["x"] + 40, box["y"] + 80)
     h0 = np.array(guide.state()["handle"])
     guide.drag(h0 + [0.05, 0.05, 0.0])
     guide.hold("e", 0.4)
-    guide.press_button(0)  # close
+    guide.press_button(0, until=lambda s: s["grip"] == 1)  # close
+    assert guide.state()["grip"] == 1
     guide.pad("pad.axes[1] = -0.9")
     time.sleep(0.5)
     guide.pad("pad.axes[1] = 0")
-    guide.press_button(9)  # start: ends
+    guide.press_button(9, until=lambda s: s["state"] != "recording")  # start: ends
     got = _wait_json(out)
     assert got["mode"] == "live"
-    raw = _check_recording(got, None)
+    raw = _check_recording(got)
     assert raw[:, 4].max() == 1

@@ -22,7 +22,8 @@
 //
 // Test hooks: window.lfdGuideState(), window.lfdGuideScreen(x, y, z) (viewport px of a
 // point in the robot's frame, in this page), window.lfdGuideLatency (ms from a move sent
-// to the frame drawn with its answer applied).
+// to the frame drawn with its answer applied), window.lfdGuideTickGaps (ms between the
+// clock's ticks while recording).
 (function () {
   if (typeof viewer === "undefined" || typeof MeshCat === "undefined") return;
   const THREE = MeshCat.THREE;
@@ -39,6 +40,10 @@
   const SHADOW = ["meshcat", "lfd", "guide-shadow"];
   const latency = [];
   window.lfdGuideLatency = latency;
+  const roundTrip = []; // ms from a move sent to its answer received (the kernel's part)
+  window.lfdGuideRoundTrip = roundTrip;
+  const gaps = []; // ms between the clock's ticks while recording (how busy the page is)
+  window.lfdGuideTickGaps = gaps;
 
   let state = "off";           // "off" | "armed" | "recording" | "sent"
   let G = null;                // the guide while not "off" (set in start)
@@ -220,6 +225,7 @@
   function answered(msg, buffers) {
     if (!G.out || msg.seq !== G.out.seq) return;
     const sent = G.out.at;
+    roundTrip.push(performance.now() - sent);
     if (buffers && buffers[0]) showArm(msg, buffers[0]);
     requestAnimationFrame(() => latency.push(performance.now() - sent));
     G.out = null;
@@ -369,6 +375,7 @@
   function tick() {
     if (!G || state === "sent") return;
     const now = performance.now();
+    if (state === "recording" && gaps.length < 100000) gaps.push(now - G.last);
     const dt = Math.min(0.25, (now - G.last) / 1000);
     G.last = now;
     const want = [0, 0, 0];
