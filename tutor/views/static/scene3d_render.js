@@ -1,5 +1,5 @@
 // How the 3-D pages draw (both: the notebook viewer's scene3d_page.html and the live
-// server's scene3d_live.html; tutor/views/scene_page.py puts it into their {{render}} slot,
+// server's scene3d_live.html; tutor/views/scene_page.py puts it into their "render" slot,
 // after meshcat's script). With software GL (headless chromium, a machine without a GPU)
 // one frame of the scene costs ~0.2 s, and meshcat's own loop draws every animation
 // frame while a clip plays: clicks then waited seconds. So this wraps meshcat's viewer:
