@@ -87,10 +87,16 @@ def start_notebook_kernel(url: str, token: str, path: str, fresh: bool = False) 
         return json.loads(reply.read())["kernel"]["id"]
 
 
-def open_and_run_all(page, url: str, token: str, path: str, timeout_ms: float) -> None:
+def open_and_run_all(
+    page, url: str, token: str, path: str, timeout_ms: float, workspace: str | None = None
+) -> None:
     """Open notebook ``path`` in JupyterLab, wait until its kernel is idle, and run all its
-    cells from the Run menu with the mouse."""
-    page.goto(f"{url}/lab/tree/{path}?token={token}")
+    cells from the Run menu with the mouse. In a ``workspace`` of its own (a fresh one,
+    reset), the notebook is the only one open: notebooks an earlier test opened are not
+    restored beside it."""
+    where = f"workspaces/{workspace}/" if workspace else ""
+    reset = "&reset" if workspace else ""
+    page.goto(f"{url}/lab/{where}tree/{path}?token={token}{reset}")
     page.locator(".jp-Notebook").wait_for(timeout=timeout_ms)
     page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").wait_for(
         timeout=timeout_ms

@@ -1,5 +1,5 @@
 // How the 3-D pages draw (both: the notebook viewer's scene3d_page.html and the live
-// server's scene3d_live.html; tutor/views/scene_page.py puts it into their render slot,
+// server's scene3d_live.html; tutor/views/scene_page.py puts it into their "render" slot,
 // after meshcat's script). With software GL (headless chromium, a machine without a GPU)
 // one frame of the scene costs ~0.2 s, and meshcat's own loop draws every animation
 // frame while a clip plays: clicks then waited seconds. So this wraps meshcat's viewer:
@@ -17,7 +17,7 @@
 //   batch is in; a batch that takes longer than WORKING_MS shows the "working" line.
 //
 // window.lfdRender = {viewer, busy(), frameMs(), frames, soft, visible(), working(text),
-// applyCommands(list, handle, big), BIG_BYTES}; window.lfdViewer(pane) builds the viewer (once per page).
+// applyCommands(list, handle, big), BIG_BYTES, hold(), release()}; window.lfdViewer(pane) builds the viewer (once per page).
 (function () {
   const FPS = 30;           // the cap with a fast GPU
   const SLICE_MS = 8;       // work per slice of an incoming batch before yielding
@@ -74,6 +74,7 @@
     let lastEnd = -1e9;      // when the last frame ended (performance.now())
     let holdSince = null;    // a batch is being applied since then (no frames meanwhile)
     let batches = 0;         // batches being applied
+    let held = false;        // lfdRender.hold() until lfdRender.release()
     let pageVisible = document.visibilityState !== "hidden";
     let seenHere = true;     // the page's own IntersectionObserver
     let seenByParent = true; // the widget's 'lfd-visible' message
@@ -85,14 +86,29 @@
       soft: soft,
       frames: 0,
       skipped: 0,
-      busy: () => batches > 0 || kernelText !== "",
+      busy: () => batches > 0 || (held && holding()) || kernelText !== "",
       frameMs: () => median(costs),
       visible: () => pageVisible && seenHere && seenByParent,
       working: (text) => { kernelText = text || ""; showWorking(); },
       applyCommands: applyCommands,
       BIG_BYTES: 100000,
+      // an update that arrives in many pieces (the live page's websocket): no frame from
+      // hold() until release() (at most HOLD_MS)
+      hold: () => {
+        if (!holding()) holdSince = performance.now();
+        held = true;
+      },
+      release: () => {
+        held = false;
+        if (batches === 0) holdSince = null;
+        viewer.set_dirty();
+      },
     };
     window.lfdRender = state;
+
+    function holding() {  // no frame now: a batch (or a held update) began < HOLD_MS ago
+      return holdSince !== null && performance.now() - holdSince < HOLD_MS;
+    }
 
     function showWorking() {
       const el = overlay();
@@ -129,7 +145,7 @@
         viewer.animator.clock.getDelta();
         wasHidden = false;
       }
-      if (holdSince !== null && now - holdSince < HOLD_MS) return;
+      if (holding()) return;
       if (!(viewer.needs_render || viewer.animator.playing)) return;
       if (now - lastEnd < gap()) { state.skipped++; return; }
       viewer.animator.update();
@@ -184,7 +200,7 @@
       } finally {
         batches--;
         if (batches === 0) {
-          holdSince = null;
+          if (!held) holdSince = null;
           if (pageWorking) { pageWorking = false; showWorking(); }
           viewer.set_dirty();
         }
