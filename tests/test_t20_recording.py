@@ -40,7 +40,7 @@ def test_the_scripted_hand_is_a_recording_a_person_could_make(task):
             assert t[0] == 0 and np.allclose(np.diff(t), 1 / 40)
             assert 6 < t[-1] < 30  # seconds, like a kinesthetic demo
             speed = np.linalg.norm(np.diff(xyz, axis=0), axis=1) * 40
-            assert 0.1 < speed.max() < 1.0  # a hand's speed, not a jump
+            assert 0.1 < speed.max() < 1.5  # a hand's peak speed, not a jump
             assert set(np.unique(g)) == {0.0, 1.0}
             demo = task.preprocess(raw)
             verdict = task.judge_demo(demo, task.conditions[plant])

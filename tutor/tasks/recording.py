@@ -184,23 +184,27 @@ def _check_reach(xyz: np.ndarray, scene) -> None:
 
 # --------------------------------------------------------------------------- the scripted hand
 
-#: Average speed of one handle move (m/s), drawn once per person.
-HAND_SPEED = (0.15, 0.3)
-#: The final approach to the plant is slower (m/s).
-FINE_SPEED = (0.05, 0.1)
+#: A move to a target of width W at distance D takes a + b log2(2 D / W + 1) seconds
+#: (Fitts' law); a and b are drawn once per person (s, s per bit). Long moves come out at
+#: 0.15 to 0.3 m/s, the precise ones slower.
+FITTS_A, FITTS_B = (0.2, 0.4), (0.18, 0.3)
+#: Target widths (m): the plant (precise), the release point, the rest (hover points).
+WIDTH_PLANT, WIDTH_RELEASE, WIDTH_LOOSE = 0.005, 0.02, 0.03
 #: The pause between two moves (s): letting go of the mouse, looking, taking it again.
 STOP_SECONDS = (0.15, 0.45)
-#: The pause at each press of the grip key (s).
-GRIP_SECONDS = (0.3, 0.7)
-#: Where a person lets go of the handle: SD off the intended point (m), horizontal, vertical.
-AIM_SD = (0.003, 0.002)
-#: A move overshoots by this fraction of its length, then is corrected back.
+#: The grip key is pressed this soon after the hand arrives (s) ...
+PRESS_SECONDS = (0.05, 0.15)
+#: ... and the hand stays this long after the press (s).
+GRIP_SECONDS = (0.4, 0.8)
+#: Where a person lets go of the handle: SD off the intended point (m), horizontal,
+#: vertical; loosely placed hover points: :data:`LOOSE_SD`.
+AIM_SD, LOOSE_SD = (0.004, 0.003), (0.01, 0.01)
+#: A move overshoots by this fraction of its length, then is corrected back (the moves
+#: onto the plant and the release point are slowed down instead).
 OVERSHOOT = (0.0, 0.04)
 #: The hand is brought down to this height above the grasp point, then across to above
 #: the plant (moving across at the start height would leave the arm's reach) (m).
 HOVER = 0.1
-#: ... then down to this height above it before the fine approach (m).
-APPROACH = 0.03
 #: The carrying height above the release point (m).
 CARRY_ABOVE_RELEASE = 0.05
 
@@ -244,27 +248,25 @@ def steady_hand(task, plant, rng=None, rate_hz: float = 40.0) -> np.ndarray:
     if not ok:
         raise InvalidParameterError(f"rate_hz must be a number from 1 to 1000, got {rate_hz!r}")
     rng = np.random.default_rng(rng)
-    speed = rng.uniform(*HAND_SPEED)
-    fine = rng.uniform(*FINE_SPEED)
+    fitts = (rng.uniform(*FITTS_A), rng.uniform(*FITTS_B))
 
-    def aim(point):
-        h, v = AIM_SD
+    def aim(point, sd=AIM_SD):
+        h, v = sd
         return np.asarray(point, float) + rng.normal(0, [h, h, v])
 
     start = np.asarray(task.start, float)
     grasp = aim(scene.plant_positions[plant])
-    release = aim(scene.release_point) + np.r_[rng.normal(0, 0.003, 2), 0.0]
+    release = aim(scene.release_point)
     carry_z = scene.release_point[2] + CARRY_ABOVE_RELEASE
-    moves = [  # (target, speed, then: None / "close" / "open")
-        (aim([start[0], start[1], grasp[2] + HOVER]), speed, None),
-        (aim(grasp + [0, 0, HOVER]), speed, None),
-        (aim(grasp + [0, 0, APPROACH]), speed, None),
-        (grasp, fine, "close"),
-        (aim([grasp[0], grasp[1], carry_z]), speed, None),
-        (aim([release[0], release[1], carry_z]), speed, None),
-        (release, speed, "open"),
+    moves = [  # (target, its width, then: None / "close" / "open")
+        (aim([start[0], start[1], grasp[2] + HOVER], LOOSE_SD), WIDTH_LOOSE, None),
+        (aim(grasp + [0, 0, HOVER]), WIDTH_LOOSE, None),
+        (grasp, WIDTH_PLANT, "close"),
+        (aim([grasp[0], grasp[1], carry_z], LOOSE_SD), WIDTH_LOOSE, None),
+        (aim([release[0], release[1], carry_z]), WIDTH_LOOSE, None),
+        (release, WIDTH_RELEASE, "open"),
     ]
-    knots, grip_at = _timeline(start, moves, rng)
+    knots, grip_at = _timeline(start, moves, fitts, rng)
     t = np.arange(0.0, knots[-1][0] + 0.5 / rate, 1.0 / rate)
     xyz = _sample(knots, t)
     xyz += _tremor(len(t), rng)
@@ -274,22 +276,22 @@ def steady_hand(task, plant, rng=None, rate_hz: float = 40.0) -> np.ndarray:
     return np.column_stack([t, xyz, g])
 
 
-def _timeline(start, moves, rng):
+def _timeline(start, moves, fitts, rng):
     """Knots (t, position) of the handle's path, and when the grip key is pressed."""
+    a, b = fitts
     knots = [(0.0, start)]
     t, here, grip_at = 0.0, start, {}
-    for target, speed, then in moves:
+    for target, width, then in moves:
         length = float(np.linalg.norm(target - here))
-        seconds = max(length / (speed * rng.uniform(0.85, 1.15)), 0.3)
-        over = target + (target - here) * rng.uniform(*OVERSHOOT)
-        t += seconds
-        knots.append((t, over))
-        t += rng.uniform(0.15, 0.3)  # the correction back
+        t += (a + b * np.log2(2 * length / width + 1)) * rng.uniform(0.9, 1.1)
+        if then is None:  # overshoot, and the correction back
+            knots.append((t, target + (target - here) * rng.uniform(*OVERSHOOT)))
+            t += rng.uniform(0.15, 0.3)
         knots.append((t, target))
         if then is not None:
-            t += rng.uniform(*GRIP_SECONDS) / 2
+            t += rng.uniform(*PRESS_SECONDS)
             grip_at[then] = t
-            t += rng.uniform(*GRIP_SECONDS) / 2
+            t += rng.uniform(*GRIP_SECONDS)
         else:
             t += rng.uniform(*STOP_SECONDS)
         knots.append((t, target))  # resting until the next move
