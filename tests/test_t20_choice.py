@@ -35,7 +35,15 @@ from tutor.views.worked_example import (
 
 
 def form():
-    return pick_and_place_experiment(scene3d=False)
+    """The start form with a 3-D view to guide in (the notebook viewer: no server)."""
+    return pick_and_place_experiment(scene3d="static")
+
+
+def test_without_a_3d_view_the_tutor_guides_the_arm():
+    bare = pick_and_place_experiment(scene3d=False)
+    assert bare.hand == "guided"
+    assert bare.guided_box.layout.display == "none"
+    assert "3-D view" in bare.hand_line()
 
 
 def start(f, name: str = "Ana", condition: str | None = "BF"):

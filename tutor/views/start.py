@@ -657,6 +657,8 @@ class PickPlaceExperiment(StartForm):
             layout=w.Layout(width="560px"),
         )
         box.add_class("lfd-start-hand")
+        if not self.scene3d:  # no 3-D view to guide in: the tutor guides the arm
+            box.layout.display = "none"
         box.observe(lambda _: self._withdraw_warning(), names="value")
         return box
 

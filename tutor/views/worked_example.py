@@ -65,7 +65,7 @@ INSTRUCTIONS = {
         "the circle."
     ),
     (2, "NF"): (
-        "No feedback. Pick a plant on the tray map and press Demonstrate. You will not "
+        "No feedback. Pick a plant on the tray map and demonstrate to it. You will not "
         "see what the robot learned until you finish the run, so choose the plants "
         "yourself."
     ),
