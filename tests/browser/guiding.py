@@ -91,6 +91,12 @@ class Guide:
         if shift:
             kb.up("Shift")
 
+    def hold(self, key: str, seconds: float) -> None:
+        """Hold ``key`` down for ``seconds``."""
+        self.page.keyboard.down(key)
+        time.sleep(seconds)
+        self.page.keyboard.up(key)
+
     def key_to_height(self, z: float, timeout: float = 10.0) -> None:
         """Hold Shift+Q (fine, down) or Shift+E (fine, up) until the handle is at ``z``."""
         kb = self.page.keyboard

@@ -19,23 +19,11 @@ import numpy as np
 import pytest
 
 from tests.browser.conftest import ARTIFACTS, open_and_run_all, start_notebook_kernel
+from tests.browser.guiding import GAMEPAD, Guide
 
 pytestmark = pytest.mark.browser
 
 VIEW = ".lfd-scene3d-view, .lfd-scene3d-live"
-
-#: a gamepad the page can poll: the test moves its sticks and presses its buttons
-GAMEPAD = """
-(() => {
-  const pad = { id: "test pad", index: 0, connected: true, mapping: "standard",
-    axes: [0, 0, 0, 0], timestamp: 0,
-    buttons: Array.from({ length: 17 }, () => ({ pressed: false, touched: false, value: 0 })) };
-  window.__lfdPad = pad;
-  Object.defineProperty(Navigator.prototype, "getGamepads", {
-    configurable: true, value: function () { return [pad, null, null, null]; } });
-})();
-"""
-
 
 def _notebook(mode: str, out: str) -> dict:
     source = (
@@ -79,65 +67,6 @@ def _notebook(mode: str, out: str) -> dict:
     }
 
 
-class Guide:
-    """The guide in the view's frame, driven as a person would."""
-
-    def __init__(self, page, timeout_ms=240_000):
-        self.page = page
-        self.view = page.locator(VIEW).first
-        self.view.wait_for(timeout=timeout_ms)
-        self.element = self.view.locator("iframe").first
-        self.frame = self.element.element_handle(timeout=timeout_ms).content_frame()
-        self.frame.wait_for_function(
-            "() => window.lfdGuideState && window.lfdGuideState().state === 'armed'",
-            timeout=timeout_ms,
-        )
-
-    def state(self) -> dict:
-        return self.frame.evaluate("() => window.lfdGuideState()")
-
-    def screen(self, p) -> tuple[float, float]:
-        """Page px of the robot-frame point ``p``."""
-        x, y = self.frame.evaluate("(p) => window.lfdGuideScreen(p[0], p[1], p[2])", list(p))
-        box = self.element.bounding_box()
-        return box["x"] + x, box["y"] + y
-
-    def drag(self, to, shift=False, steps=25):
-        """Drag the ball to the robot-frame point ``to`` (with Shift: up/down only)."""
-        mouse, kb = self.page.mouse, self.page.keyboard
-        x0, y0 = self.screen(self.state()["handle"])
-        x1, y1 = self.screen(to)
-        if shift:
-            kb.down("Shift")
-        mouse.move(x0, y0)
-        mouse.down()
-        for k in range(1, steps + 1):
-            mouse.move(x0 + (x1 - x0) * k / steps, y0 + (y1 - y0) * k / steps)
-            time.sleep(0.02)
-        mouse.up()
-        if shift:
-            kb.up("Shift")
-
-    def hold(self, key, seconds):
-        self.page.keyboard.down(key)
-        time.sleep(seconds)
-        self.page.keyboard.up(key)
-
-    def pad(self, script: str):
-        self.frame.evaluate(f"() => {{ const pad = window.__lfdPad; {script}; }}")
-
-    def press_button(self, i, until=None, timeout=5.0):
-        """Press gamepad button ``i``, held until ``until(state)`` holds (as a person holds
-        a button until the view shows it took: a busy page polls the pad late)."""
-        self.pad(f"pad.buttons[{i}].pressed = true; pad.buttons[{i}].value = 1")
-        deadline = time.monotonic() + timeout
-        time.sleep(0.15)
-        while until is not None and not until(self.state()) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        self.pad(f"pad.buttons[{i}].pressed = false; pad.buttons[{i}].value = 0")
-        time.sleep(0.3)
-
-
 def _wait_json(path, timeout=60.0) -> dict:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -157,7 +86,8 @@ def _run(jupyterlab, workdir, page, mode: str, name: str):
     start_notebook_kernel(url, token, nb, fresh=True)
     open_and_run_all(page, url, token, nb, 240_000)
     try:
-        guide = Guide(page)
+        guide = Guide(page, page.locator(VIEW).first)
+        guide.wait_state("armed", timeout_ms=240_000)
     except Exception:
         page.screenshot(path=str(ARTIFACTS / f"guide_{name}_timeout.png"))
         raise
