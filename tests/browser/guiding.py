@@ -118,9 +118,14 @@ class Guide:
     def pad(self, script: str) -> None:
         self.frame.evaluate(f"() => {{ const pad = window.__lfdPad; {script}; }}")
 
-    def press_button(self, i: int) -> None:
+    def press_button(self, i: int, until=None, timeout: float = 5.0) -> None:
+        """Press gamepad button ``i``, held until ``until(state)`` holds (as a person holds
+        a button until the view shows it took: a busy page polls the pad late)."""
         self.pad(f"pad.buttons[{i}].pressed = true; pad.buttons[{i}].value = 1")
+        deadline = time.monotonic() + timeout
         time.sleep(0.3)
+        while until is not None and not until(self.state()) and time.monotonic() < deadline:
+            time.sleep(0.05)
         self.pad(f"pad.buttons[{i}].pressed = false; pad.buttons[{i}].value = 0")
         time.sleep(0.2)
 
@@ -129,7 +134,7 @@ class Guide:
         if self.state()["grip"] == (1 if closed else 0):
             return
         if with_pad:
-            self.press_button(0)
+            self.press_button(0, until=lambda s: s["grip"] == (1 if closed else 0))
         else:
             self.page.keyboard.press("Space")
         self.frame.wait_for_function(
@@ -165,6 +170,6 @@ class Guide:
             self.drag([h[0], h[1], release[2]], shift=True)
         self.grip(False, with_pad=style == "gamepad")
         if style == "gamepad":
-            self.press_button(9)
+            self.press_button(9, until=lambda s: s["state"] != "recording")
         else:
             self.page.keyboard.press("Enter")
