@@ -156,7 +156,16 @@ def teach_five(page, condition: str, trainee: str, figures: dict, axe_name: str 
         if axe_name and k == 0:
             axe_check(page, ARTIFACTS, axe_name, [TUTOR])
         guide.pick_and_place(scene.plant_positions[plant], scene.release_point, style=style)
-        tutor.get_by_text(re.compile(rf"demonstrations: {k + 1}(?!\d)")).wait_for(timeout=120_000)
+        try:
+            tutor.get_by_text(re.compile(rf"demonstrations: {k + 1}(?!\d)")).wait_for(
+                timeout=120_000
+            )
+        except Exception as error:
+            page.screenshot(path=str(ARTIFACTS / f"own_hand_{trainee}_demo{k + 1}.png"))
+            raise AssertionError(
+                f"{condition} demo {k + 1} ({style}) to plant {plant} was not counted; the "
+                f"guide: {guide.state()}; the tutor says: {tutor.inner_text()[:1500]}"
+            ) from error
         figures["demo_wall_s"].append(time.monotonic() - t0)
         print(
             f"{condition} demo {k + 1} ({style}) to plant {plant}: "
