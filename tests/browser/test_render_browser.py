@@ -164,6 +164,19 @@ def test_plant_clicked_right_after_a_demo_highlights_fast(page, jupyterlab, work
     demonstrate = tutor.get_by_role("button", name="Demonstrate", exact=True)
     state = view.render()
     assert state["present"] and state["visible"], state
+    # a message posted to the page is handled once, not echoed back to it (meshcat's
+    # bundle leaves a GIF worker's onmessage in the page that posted every message back)
+    echoes = view.body.evaluate(
+        """() => new Promise((done) => {
+          let n = 0;
+          window.addEventListener("message", (e) => {
+            if (e.data && e.data.type === "lfd-echo-probe") n++;
+          });
+          window.postMessage({ type: "lfd-echo-probe" }, "*");
+          setTimeout(() => done([n, window.onmessage === null]), 1000);
+        })"""
+    )
+    assert echoes == [1, True], f"a message was seen {echoes[0]} times in 1 s: {echoes}"
 
     # no frame while nothing changes (the scene loaded, nothing plays)
     time.sleep(1.0)

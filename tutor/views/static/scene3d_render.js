@@ -16,9 +16,16 @@
 //   SLICE_MS, yielding to input (setTimeout 0) between slices, and draws nothing until the
 //   batch is in; a batch that takes longer than WORKING_MS shows the "working" line.
 //
+// (And it takes away the onmessage handler meshcat's bundle leaves, see below.)
 // window.lfdRender = {viewer, busy(), frameMs(), frames, soft, visible(), working(text),
 // applyCommands(list, handle, big), BIG_BYTES, hold(), release()}; window.lfdViewer(pane) builds the viewer (once per page).
 (function () {
+  // meshcat's bundle carries CCapture's GIF worker, whose code, run in the page, sets
+  // self.onmessage to "encode e.data, then self.postMessage(e.data)": every message
+  // posted to the page (the widget's 'lfd-visible', 'lfd-working', the guide's) was
+  // echoed back to it forever, a few thousand a second, starving input and frames. Our
+  // listeners use addEventListener; the page needs no onmessage.
+  if (window.onmessage) window.onmessage = null;
   const FPS = 30;           // the cap with a fast GPU
   const SLICE_MS = 8;       // work per slice of an incoming batch before yielding
   const WORKING_MS = 300;   // a batch longer than this says it is working
