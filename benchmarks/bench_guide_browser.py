@@ -76,7 +76,8 @@ def one_run(browser, url, token, root: Path, mode: str, moves: int) -> dict:
     accept_kernel_dialog(page)
     start_notebook_kernel(url, token, nb, fresh=True)
     open_and_run_all(page, url, token, nb, 240_000)
-    guide = Guide(page)
+    guide = Guide(page, page.locator(".lfd-scene3d").first)
+    guide.wait_state("armed", timeout_ms=240_000)
     box = guide.element.bounding_box()
     page.mouse.click(box["x"] + 40, box["y"] + 80)
     h0 = np.array(guide.state()["handle"])
@@ -99,6 +100,10 @@ def one_run(browser, url, token, root: Path, mode: str, moves: int) -> dict:
         page.mouse.move(px, py)
         time.sleep(0.1)
     page.mouse.up()
+    # a recording must close and open the hand (else the kernel refuses it)
+    for _ in range(2):
+        time.sleep(0.5)
+        page.keyboard.press("Space")
     time.sleep(1.0)
     page.keyboard.press("Enter")
     deadline = time.monotonic() + 60

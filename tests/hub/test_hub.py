@@ -24,7 +24,11 @@ the target is p95 <= 1 s on this 2-core machine. Memory is each user's single-us
 server with its kernels, as PSS from /proc/PID/smaps_rollup.
 
 Then one browser trainee opens notebook 03 and its 3-D view must render in the
-server-free widget mode (no Meshcat server process anywhere in the hub's tree). Every
+server-free widget mode (no Meshcat server process anywhere in the hub's tree), and the
+trainee guides the arm to one plant with their own hand (real mouse drags and keys through
+the hub's proxy): the demo is counted, its run file holds it as given by the own hand with
+its recording, and the handle-to-arm latencies go to hub_latency.json (judged by
+``benchmarks/bench_browser.py --hub``, target p90 <= 150 ms). Every
 socket the hub's processes listen on must be on loopback. Finally
 ``python -m tutor class`` must find the 8 trainees with their demonstrations.
 Every process of the hub is ended at the end, even on failure.
@@ -51,6 +55,7 @@ from tests.browser.conftest import (
     fail_on_errors,
     watch_errors,
 )
+from tests.browser.guiding import Guide, pickplace_scene
 from tests.browser.test_maze_browser import (
     STARTS,
     WIDGET_TIMEOUT_MS,
@@ -75,6 +80,8 @@ N_BROWSER_DEMOS = 3
 #: kernel trainees add a VF demonstration this often (s) while the browsers draw
 KERNEL_INTERVAL_S = 2.0
 P95_TARGET_MS = 1000.0
+#: the plant the browser trainee guides the arm to in notebook 03 (through the hub)
+OWN_HAND_PLANT = 45
 
 #: arms the page's clock for one stroke: pointer release, then the panel's new count
 ARM_CLOCK = """(tutor, n) => {
@@ -245,7 +252,54 @@ def check_notebook_03(page, hub: Hub, user: str, name: str) -> dict:
     # a live viewer would be a `python -m tutor.views.meshcat_server` child of the kernel
     meshcat = [p for p in hub.remember() if b"meshcat" in _cmdline(p)]
     assert not meshcat, f"a Meshcat server runs behind the hub: {meshcat}"
-    return {"start_to_3d_view_s": round(rendered_s, 1)}
+    own_hand = guide_one_demo(page, form, hub, user, name)
+    return {"start_to_3d_view_s": round(rendered_s, 1), "own_hand": own_hand}
+
+
+def guide_one_demo(page, form, hub: Hub, user: str, name: str) -> dict:
+    """The trainee guides the arm to plant OWN_HAND_PLANT with the real mouse and keys,
+    through the hub's proxy; the run file then holds it as an own-hand demonstration.
+    Returns the handle-to-arm latencies (ms) and the demo's wall time (s)."""
+    from tutor.framework.record import RunRecord
+
+    scene = pickplace_scene()
+    tutor = form.locator(".lfd-pickplace-tutor").first
+    tutor.locator(".widget-gridbox button").nth(OWN_HAND_PLANT).click()
+    tutor.locator(".lfd-guide-button").click()
+    view = tutor.locator(".lfd-scene3d")
+    view.scroll_into_view_if_needed()
+    guide = Guide(page, view, timeout_ms=WIDGET_TIMEOUT_MS)
+    guide.wait_state("armed", timeout_ms=WIDGET_TIMEOUT_MS)
+    t0 = time.monotonic()
+    try:
+        guide.pick_and_place(
+            scene.plant_positions[OWN_HAND_PLANT], scene.release_point, style="mouse"
+        )
+        tutor.get_by_text(re.compile(r"demonstrations: 1(?!\d)")).wait_for(timeout=120_000)
+    except Exception as error:
+        page.screenshot(path=str(ARTIFACTS / "hub_own_hand.png"))
+        raise AssertionError(
+            f"the own-hand demo through the hub was not counted; the guide: {guide.state()}; "
+            f"the tutor says: {tutor.inner_text()[:1500]}"
+        ) from error
+    wall_s = time.monotonic() - t0
+    page.screenshot(path=str(ARTIFACTS / "hub_own_hand.png"))
+    latencies = guide.latencies()
+    assert latencies, "the guide measured no handle-to-arm latency through the hub"
+    folders = [f for f in (hub.class_dir / user).iterdir() if f.is_dir()]
+    files = [f / "pickplace_RF_run1.json" for f in folders]
+    record = RunRecord.from_dict(json.loads(next(f for f in files if f.exists()).read_text()))
+    assert record.trainee.name == name and record.condition == "RF"
+    (demo,) = record.current.demos
+    assert demo.given == "own", demo.given
+    assert len(demo.recording) >= 20, len(demo.recording)
+    return {
+        "handle_to_arm_ms": latencies,
+        "handle_to_arm_median_ms": percentile(latencies, 50),
+        "handle_to_arm_p90_ms": percentile(latencies, 90),
+        "demo_wall_s": round(wall_s, 1),
+        "recording_samples": len(demo.recording),
+    }
 
 
 # ---------------------------------------------------------------- the test

@@ -46,7 +46,8 @@ For an educator (e.g. a workshop), from the environment of the notebook server:
 ``TUTOR_CLASS_PLAN``
     A class plan file (CSV or JSON, :mod:`tutor.framework.assignment`) saying which
     trainee teaches in which condition, or "balanced". The condition buttons then show
-    the condition of the name in the form (it follows the name as it is typed), are
+    the condition of the name in the form (it follows the name once typed: Tab, Enter or
+    a click elsewhere), are
     locked, and the note says why ("your educator's class plan assigns you RF"). If the
     trainee's folder already holds counted runs in another condition (the roster changed
     after they started), they carry on in that condition and the note says so. A plan
@@ -258,6 +259,13 @@ class StartForm:
             description="Your name",
             disabled=bool(fixed_name),
             layout=w.Layout(width="320px"),
+            # The name reaches the kernel when the field is left (the click on Start
+            # leaves it first) or Enter is pressed, not at every keystroke: ipywidgets
+            # holds back a model's updates while one is in flight and sends them when the
+            # kernel is idle, but a button's click is sent at once, so a name typed fast
+            # and followed by Start reached the kernel cut short ("voila-" for "voila-bf")
+            # and the runs went to another trainee's folder.
+            continuous_update=False,
         )
         self.name.add_class("lfd-start-name")
         self.practice = w.Checkbox(

@@ -227,7 +227,9 @@
     const sent = G.out.at;
     roundTrip.push(performance.now() - sent);
     if (buffers && buffers[0]) showArm(msg, buffers[0]);
-    requestAnimationFrame(() => latency.push(performance.now() - sent));
+    // the latency ends when a frame with the arm at its answer has been drawn
+    if (window.lfdRender) lfdRender.afterFrame((end) => latency.push(end - sent));
+    else requestAnimationFrame(() => latency.push(performance.now() - sent));
     G.out = null;
     if (G.dirty) sendMove();
   }
@@ -277,6 +279,7 @@
     drawHandle();
     say(msg.words);
     document.body.classList.add("lfd-guiding");
+    if (window.lfdRender) lfdRender.interactive(true);
     showFocus();
     timer = setInterval(tick, TICK_MS);
   }
@@ -292,6 +295,7 @@
     state = "off";
     held.clear();
     document.body.classList.remove("lfd-guiding");
+    if (window.lfdRender) lfdRender.interactive(false);
   }
   function refused(msg) {
     say(msg.words);

@@ -12,13 +12,16 @@
 //   own IntersectionObserver, and the 'lfd-visible' message the notebook widget posts from
 //   its IntersectionObserver); a clip waits there, paused, and goes on when seen again;
 // - on software GL: no antialiasing, pixel ratio 1, no shadow maps;
+// - while a hand is guided (lfdRender.interactive(true), guide.js): no idle gap after a
+//   frame beyond the FPS cap, and on software GL half the pixels a side;
 // - lfdRender.applyCommands(list, handle) applies a batch of commands in slices of about
 //   SLICE_MS, yielding to input (setTimeout 0) between slices, and draws nothing until the
 //   batch is in; a batch that takes longer than WORKING_MS shows the "working" line.
 //
 // (And it takes away the onmessage handler meshcat's bundle leaves, see below.)
 // window.lfdRender = {viewer, busy(), frameMs(), frames, soft, visible(), working(text),
-// applyCommands(list, handle, big), BIG_BYTES, hold(), release()}; window.lfdViewer(pane) builds the viewer (once per page).
+// applyCommands(list, handle, big), BIG_BYTES, hold(), release(), afterFrame(cb),
+// interactive(on)}; window.lfdViewer(pane) builds the viewer (once per page).
 (function () {
   // meshcat's bundle carries CCapture's GIF worker, whose code, run in the page, sets
   // self.onmessage to "encode e.data, then self.postMessage(e.data)": every message
@@ -29,6 +32,7 @@
   const FPS = 30;           // the cap with a fast GPU
   const SLICE_MS = 8;       // work per slice of an incoming batch before yielding
   const WORKING_MS = 300;   // a batch longer than this says it is working
+  const SOFT_INTERACTIVE_RATIO = 0.5; // pixel ratio scale while guiding on software GL
   const HOLD_MS = 1500;     // at most this long without a frame while batches arrive
   const THREE = MeshCat.THREE;
 
@@ -88,6 +92,9 @@
     let wasHidden = false;
     let kernelText = "";     // the kernel's "working" line (lfdRender.working)
     let pageWorking = false;
+    let drawn = [];          // one-shot callbacks for after the next frame (afterFrame)
+    let interactive = false; // a hand is being guided (lfdRender.interactive)
+    let fullRatio = 1;       // the pixel ratio when not interactive
     const state = {
       viewer: viewer,
       soft: soft,
@@ -98,7 +105,21 @@
       visible: () => pageVisible && seenHere && seenByParent,
       working: (text) => { kernelText = text || ""; showWorking(); },
       applyCommands: applyCommands,
-      BIG_BYTES: 100000,
+      // cb(ms) once the next frame is drawn (ms: when it ended, performance.now())
+      afterFrame: (cb) => { drawn.push(cb); },
+      // while a hand is guided: frames follow the answers at once (no idle gap after a
+      // frame) and, on software GL, at half the pixels a side (a quarter of the work),
+      // the full picture coming back when it ends
+      interactive: (on) => {
+        on = Boolean(on);
+        if (on === interactive) return;
+        interactive = on;
+        if (soft) {
+          if (on) fullRatio = renderer.getPixelRatio();
+          renderer.setPixelRatio(on ? fullRatio * SOFT_INTERACTIVE_RATIO : fullRatio);
+        }
+        viewer.set_dirty();
+      },
       // an update that arrives in many pieces (the live page's websocket): no frame from
       // hold() until release() (at most HOLD_MS)
       hold: () => {
@@ -126,9 +147,10 @@
     }
 
     function gap() {
-      // idle time after a frame: as long as the frame took, and the rest of 1/FPS
+      // idle time after a frame: as long as the frame took, and the rest of 1/FPS (while
+      // a hand is guided, only the rest of 1/FPS: the trainee waits for the arm)
       const cost = median(costs);
-      return Math.max(1000 / FPS - cost, cost);
+      return interactive ? 1000 / FPS - cost : Math.max(1000 / FPS - cost, cost);
     }
 
     let renderAt = null;     // when the frame whose cost is not yet known started
@@ -164,6 +186,11 @@
       renderAt = t0;
       state.frames++;
       document.body.dataset.frames = String(state.frames);
+      if (drawn.length) {
+        const callbacks = drawn;
+        drawn = [];
+        for (const cb of callbacks) cb(lastEnd);
+      }
     }
     requestAnimationFrame(tick);
 
