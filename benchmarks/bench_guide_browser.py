@@ -114,6 +114,7 @@ def one_run(browser, url, token, root: Path, mode: str, moves: int) -> dict:
     latency = guide.frame.evaluate("() => window.lfdGuideLatency")
     trip = guide.frame.evaluate("() => window.lfdGuideRoundTrip")
     gaps = guide.frame.evaluate("() => window.lfdGuideTickGaps")
+    frame_ms = guide.frame.evaluate("() => window.lfdRender ? lfdRender.frameMs() : null")
     context.close()
     spacing = np.diff(np.array(got["raw"])[:, 0]) * 1e3
     return {
@@ -121,6 +122,7 @@ def one_run(browser, url, token, root: Path, mode: str, moves: int) -> dict:
         "latency_p90_ms": float(np.percentile(latency, 90)),
         "answers": len(latency),
         "round_trip_median_ms": float(np.median(trip)),
+        "frame_ms": frame_ms,
         "spacing_median_ms": float(np.median(spacing)),
         "spacing_max_ms": float(spacing[:-1].max() if len(spacing) > 1 else spacing.max()),
         "tick_gap_median_ms": float(np.median(gaps)),
@@ -162,6 +164,7 @@ def main() -> None:
                     f"{mode:6s} handle -> arm drawn: median {med['latency_median_ms']:.0f} ms, "
                     f"p90 {med['latency_p90_ms']:.0f} ms ({med['answers']:.0f} answers; "
                     f"kernel round trip median {med['round_trip_median_ms']:.0f} ms; "
+                    f"a frame {med['frame_ms'] or 0:.0f} ms; "
                     "targets <= 50 / <= 100)"
                 )
                 print(

@@ -75,6 +75,17 @@ _tutor_env_setup() {
             cp "$TUTOR_ROOT/scripts/jupyterlab_page_config.json" "$labconfig/page_config.json"
     fi
 
+    # The kernel's websocket without Nagle's delay (tutor/kernel_socket.py: a
+    # widget's message reached the page ~43 ms late), for JupyterLab, the hub's
+    # single-user servers (etc/jupyter/jupyter_server_config.d) and Voila (voila.json).
+    local config
+    for config in etc/jupyter/jupyter_server_config.d/lfd-tutor.json etc/jupyter/voila.json; do
+        if ! cmp -s "$TUTOR_ROOT/$config" "$TUTOR_VENV/$config"; then
+            mkdir -p "$(dirname "$TUTOR_VENV/$config")" &&
+                cp "$TUTOR_ROOT/$config" "$TUTOR_VENV/$config"
+        fi
+    done
+
     # Voila's page for the tutor's notebooks (share/jupyter/voila/templates/lfd-tutor: no
     # CDN, the kernel shut down on leaving). A wheel installs it as data files; an editable
     # install does not, so it is copied here.

@@ -137,7 +137,7 @@ class SceneRecorder:
             live.zmq_socket.recv()
         except Exception as exc:  # zmq.Again (timeout) or a closed socket
             self.live = None
-            self.live_error = f"the live viewer stopped answering ({type(exc).__name__})"
+            self.live_error = f"the live viewer stopped answering ({type(exc).__name__}: {exc})"
             try:
                 live.zmq_socket.close(linger=0)
             except Exception:  # pragma: no cover - already closed

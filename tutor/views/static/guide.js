@@ -16,13 +16,18 @@
 // the table. From the first move to Enter it records (t, x, y, z, g) every TICK_MS and
 // sends the recording ONCE, on Enter, as one Float64Array (guide-end), with the set-up
 // time (arming to first move). Meanwhile each move goes to the kernel (at most one in
-// flight: the newest is sent when the previous is answered); its answer carries the
-// links' placements, which are put on the robot's nodes directly, a link in collision in
-// red, and the words shown on screen. Nothing recorded waits for the kernel.
+// flight: the newest is sent once the previous answer is on screen); its answer carries
+// the links' placements, which are put on the robot's nodes directly, a link in
+// collision in red, and the words shown on screen. No frame is started while a move
+// waits for its answer (lfdRender.awaitAnswer: with software GL a frame keeps the page
+// busy ~40-60 ms, and the answer would wait behind it). Nothing recorded waits for the
+// kernel.
 //
 // Test hooks: window.lfdGuideState(), window.lfdGuideScreen(x, y, z) (viewport px of a
 // point in the robot's frame, in this page), window.lfdGuideLatency (ms from a move sent
-// to the frame drawn with its answer applied), window.lfdGuideTickGaps (ms between the
+// to the frame with its answer applied being on screen: the animation frame after it was
+// drawn), window.lfdGuideRoundTrip (ms from a move sent to its answer received),
+// window.lfdGuideTickGaps (ms between the
 // clock's ticks while recording).
 (function () {
   if (typeof viewer === "undefined" || typeof MeshCat === "undefined") return;
@@ -220,6 +225,7 @@
     G.dirty = false;
     G.seq += 1;
     G.out = { seq: G.seq, at: now };
+    if (window.lfdRender) lfdRender.awaitAnswer(true);
     post({ type: "guide-move", seq: G.seq, x: G.h[0], y: G.h[1], z: G.h[2], g: G.g });
   }
   function answered(msg, buffers) {
@@ -231,7 +237,12 @@
     if (window.lfdRender) lfdRender.afterFrame((end) => latency.push(end - sent));
     else requestAnimationFrame(() => latency.push(performance.now() - sent));
     G.out = null;
-    if (G.dirty) sendMove();
+    if (!window.lfdRender) { if (G.dirty) sendMove(); return; }
+    lfdRender.awaitAnswer(false);
+    // the next move goes once this answer is drawn (or 100 ms on, if no frame comes)
+    const next = () => { if (G && G.dirty && !G.out) sendMove(); };
+    lfdRender.afterFrame(next);
+    setTimeout(next, 100);
   }
   window.addEventListener("message", (event) => {
     if (event.source !== window.parent || window.parent === window) return;
@@ -295,11 +306,15 @@
     state = "off";
     held.clear();
     document.body.classList.remove("lfd-guiding");
-    if (window.lfdRender) lfdRender.interactive(false);
+    if (window.lfdRender) { lfdRender.interactive(false); lfdRender.awaitAnswer(false); }
   }
   function refused(msg) {
     say(msg.words);
-    if (msg.what === "guide-move") { G.out = null; return; }
+    if (msg.what === "guide-move") {
+      G.out = null;
+      if (window.lfdRender) lfdRender.awaitAnswer(false);
+      return;
+    }
     if (msg.what === "guide-end") { // guide again, from where the hand is
       G.rec = [];
       G.knots = [];

@@ -13,7 +13,9 @@
 //   its IntersectionObserver); a clip waits there, paused, and goes on when seen again;
 // - on software GL: no antialiasing, pixel ratio 1, no shadow maps;
 // - while a hand is guided (lfdRender.interactive(true), guide.js): no idle gap after a
-//   frame beyond the FPS cap, and on software GL half the pixels a side;
+//   frame beyond the FPS cap, and on software GL half the pixels a side; no frame starts
+//   while a move waits for the kernel's answer (lfdRender.awaitAnswer, at most ANSWER_MS),
+//   and lfdRender.afterFrame(cb) calls cb once the next frame is on screen;
 // - lfdRender.applyCommands(list, handle) applies a batch of commands in slices of about
 //   SLICE_MS, yielding to input (setTimeout 0) between slices, and draws nothing until the
 //   batch is in; a batch that takes longer than WORKING_MS shows the "working" line.
@@ -21,7 +23,7 @@
 // (And it takes away the onmessage handler meshcat's bundle leaves, see below.)
 // window.lfdRender = {viewer, busy(), frameMs(), frames, soft, visible(), working(text),
 // applyCommands(list, handle, big), BIG_BYTES, hold(), release(), afterFrame(cb),
-// interactive(on)}; window.lfdViewer(pane) builds the viewer (once per page).
+// interactive(on), awaitAnswer(on)}; window.lfdViewer(pane) builds the viewer (once per page).
 (function () {
   // meshcat's bundle carries CCapture's GIF worker, whose code, run in the page, sets
   // self.onmessage to "encode e.data, then self.postMessage(e.data)": every message
@@ -32,6 +34,7 @@
   const FPS = 30;           // the cap with a fast GPU
   const SLICE_MS = 8;       // work per slice of an incoming batch before yielding
   const WORKING_MS = 300;   // a batch longer than this says it is working
+  const ANSWER_MS = 150;     // at most this long without a frame while a move is answered
   const SOFT_INTERACTIVE_RATIO = 0.5; // pixel ratio scale while guiding on software GL
   const HOLD_MS = 1500;     // at most this long without a frame while batches arrive
   const THREE = MeshCat.THREE;
@@ -95,6 +98,7 @@
     let drawn = [];          // one-shot callbacks for after the next frame (afterFrame)
     let interactive = false; // a hand is being guided (lfdRender.interactive)
     let fullRatio = 1;       // the pixel ratio when not interactive
+    let answerSince = null;  // a guided move waits for its answer since (awaitAnswer)
     const state = {
       viewer: viewer,
       soft: soft,
@@ -105,7 +109,11 @@
       visible: () => pageVisible && seenHere && seenByParent,
       working: (text) => { kernelText = text || ""; showWorking(); },
       applyCommands: applyCommands,
-      // cb(ms) once the next frame is drawn (ms: when it ended, performance.now())
+      // no frame while a guided move waits for the kernel's answer (at most ANSWER_MS):
+      // a frame started then keeps the page (and the answer) waiting for the renderer
+      awaitAnswer: (on) => { answerSince = on ? performance.now() : null; },
+      // cb(ms) once the next frame is on screen: at the animation frame after it (the
+      // renderer's work is done by then), ms = performance.now() then
       afterFrame: (cb) => { drawn.push(cb); },
       // while a hand is guided: frames follow the answers at once (no idle gap after a
       // frame) and, on software GL, at half the pixels a side (a quarter of the work),
@@ -165,6 +173,11 @@
         if (costs.length > 15) costs.shift();
         renderAt = null;
         lastEnd = now;
+        if (drawn.length) {  // the frame is on screen now
+          const callbacks = drawn;
+          drawn = [];
+          for (const cb of callbacks) cb(now);
+        }
       }
       if (!state.visible()) {
         if (viewer.animator.playing) wasHidden = true;
@@ -175,6 +188,7 @@
         wasHidden = false;
       }
       if (holding()) return;
+      if (answerSince !== null && now - answerSince < ANSWER_MS) return;
       if (!(viewer.needs_render || viewer.animator.playing)) return;
       if (now - lastEnd < gap()) { state.skipped++; return; }
       viewer.animator.update();
@@ -186,11 +200,6 @@
       renderAt = t0;
       state.frames++;
       document.body.dataset.frames = String(state.frames);
-      if (drawn.length) {
-        const callbacks = drawn;
-        drawn = [];
-        for (const cb of callbacks) cb(lastEnd);
-      }
     }
     requestAnimationFrame(tick);
 
