@@ -109,6 +109,7 @@
       visible: () => pageVisible && seenHere && seenByParent,
       working: (text) => { kernelText = text || ""; showWorking(); },
       applyCommands: applyCommands,
+      BIG_BYTES: 100000,
       // no frame while a guided move waits for the kernel's answer (at most ANSWER_MS):
       // a frame started then keeps the page (and the answer) waiting for the renderer
       awaitAnswer: (on) => { answerSince = on ? performance.now() : null; },
