@@ -59,7 +59,10 @@ _tutor_env_setup() {
 
     # JupyterLab settings for a workshop room: no news or update pop-ups (and no
     # fetching them from the internet), and no "Select Kernel" question: a notebook
-    # without a kernel starts the preferred one, as pressing Select would; see
+    # without a kernel starts the preferred one, as pressing Select would; and widget
+    # messages handled on the kernel's main thread, not in a subshell (JupyterLab 4.4's
+    # default with ipykernel 7 ran the widgets' callbacks in a thread beside the main
+    # one, and a run's next tutor sometimes never reached the page); see
     # scripts/jupyterlab_overrides.json.
     local settings="$TUTOR_VENV/share/jupyter/lab/settings"
     if ! cmp -s "$TUTOR_ROOT/scripts/jupyterlab_overrides.json" "$settings/overrides.json"; then
