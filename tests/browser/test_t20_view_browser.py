@@ -83,26 +83,49 @@ SCROLLED = """(el) => {
 
 
 #: keeps the kind of each message the page's kernel websocket received (for the report)
-WS_LOG = """
+#: Logs, in the page, every kernel message over the websocket both ways (JupyterLab's
+#: binary v1 protocol or JSON): channel, type, comm id, method, state keys and the widget
+#: models the state refers to; for the report when a run's tutor does not appear.
+WS_LOG = r"""
 (() => {
   window.__wsLog = [];
   const dec = new TextDecoder();
+  const parse = (d) => {
+    if (typeof d === 'string') {
+      const m = JSON.parse(d);
+      return [m.channel, m.header.msg_type, m.content || {}];
+    }
+    const v = new DataView(d);
+    const n = Number(v.getBigUint64(0, true));
+    const off = [];
+    for (let i = 0; i < n; i++) off.push(Number(v.getBigUint64(8 * (i + 1), true)));
+    const part = (i) => dec.decode(new Uint8Array(d, off[i],
+      (i + 1 < n ? off[i + 1] : d.byteLength) - off[i]));
+    const header = JSON.parse(part(1));
+    return [part(0), header.msg_type, n > 4 ? JSON.parse(part(4)) : {}];
+  };
   const kind = (d) => {
     try {
-      const t = typeof d === 'string' ? d : dec.decode(new Uint8Array(d).slice(0, 4000));
-      const m = t.match(/"msg_type":\\s*"([a-z_]+)"/);
-      const st = t.match(/"execution_state":\\s*"([a-z]+)"/);
-      return (m ? m[1] : '?') + (st ? ':' + st[1] : '');
-    } catch (e) { return 'undecodable'; }
+      const [channel, type, c] = parse(d);
+      const data = c.data || {};
+      const state = data.state || {};
+      const refs = (JSON.stringify(state).match(/IPY_MODEL_[0-9a-f]{6}/g) || [])
+        .map((r) => r.slice(10));
+      return [channel, type, c.execution_state || '', (c.comm_id || '').slice(0, 6),
+        data.method || '', Object.keys(state).slice(0, 5).join(','), refs.join(',')]
+        .filter((x) => x).join(' ');
+    } catch (e) { return 'undecodable ' + e; }
+  };
+  const log = (dir, d) => {
+    window.__wsLog.push(Math.round(performance.now()) + ' ' + dir + ' ' + kind(d));
+    if (window.__wsLog.length > 4000) window.__wsLog.shift();
   };
   const desc = Object.getOwnPropertyDescriptor(WebSocket.prototype, 'onmessage');
   Object.defineProperty(WebSocket.prototype, 'onmessage', {
-    set(f) { desc.set.call(this, (ev) => {
-      window.__wsLog.push([Math.round(performance.now()), kind(ev.data)]);
-      if (window.__wsLog.length > 400) window.__wsLog.shift();
-      return f.call(this, ev);
-    }); },
+    set(f) { desc.set.call(this, (ev) => { log('in', ev.data); return f.call(this, ev); }); },
     get() { return desc.get.call(this); } });
+  const send = WebSocket.prototype.send;
+  WebSocket.prototype.send = function (d) { log('out', d); return send.call(this, d); };
 })();
 """
 
@@ -121,9 +144,12 @@ class RunView:
             form.locator(".lfd-start-note").scroll_into_view_if_needed()
             page.screenshot(path=str(ARTIFACTS / f"t20_no_run{run}.png"))
             tutors = page.locator(".lfd-pickplace-tutor")
-            seen = page.evaluate("() => (window.__wsLog || []).slice(-40)")
+            seen = page.evaluate("() => window.__wsLog || []")
+            console = getattr(page, "lfd_console", [])
+            (ARTIFACTS / f"t20_no_run{run}_messages.txt").write_text("\n".join(console + seen))
             raise AssertionError(
-                f"run {run}'s tutor did not appear (the last kernel messages: {seen}): "
+                f"run {run}'s tutor did not appear (the page's kernel messages are in "
+                f"t20_no_run{run}_messages.txt; the last: {seen[-15:]}): "
                 f"{tutors.count()} tutors on the page; "
                 f"the form says: {form.locator('.lfd-start-note').inner_text()!r}; the "
                 f"page's end: {form.inner_text()[-1500:]!r}"
@@ -221,6 +247,8 @@ def _teach_one(page, run: int, plant: int, finish: bool) -> tuple[RunView, dict]
 def test_three_runs_keep_their_own_view_and_the_wheel_scrolls_the_page(page, jupyterlab, artifacts):
     url, token = jupyterlab
     page.add_init_script(WS_LOG)
+    page.lfd_console = []  # for the report when a run's tutor does not appear
+    page.on("console", lambda m: page.lfd_console.append(f"console {m.type}: {m.text}"))
     start_notebook_kernel(url, token, NOTEBOOK, fresh=True)  # not the last test's kernel
     # in a workspace of its own: the default one restores notebook 03 as an earlier test
     # left it, and run 3's tutor was then looked for in the hidden copy (CI, twice)

@@ -1,13 +1,17 @@
 """The 3-D scene's geometry: the robot's meshes, the table, tray, bin, plants and hand.
 
-The robot's visual meshes come from example-robot-data through Pinocchio's
-``MeshcatVisualizer`` (which only loads them here: where they are placed is
-:meth:`tutor.robot.Arm.visual_placements`), recorded once per process as Meshcat
-commands so every scene reuses them. The rest are meshcat primitives drawn from a
-:class:`~tutor.tasks.pickplace.PickPlaceScene`: the obstacle boxes of
-:func:`tutor.robot.scene_obstacles` (table, tray, bin floor and walls), a stem per
-plant (its status ball is the drawing's, :mod:`tutor.views.scene3d`), and the hand
-marker, one ball for open and one for closed.
+The robot's visual meshes are example-robot-data's own (the COLLADA files of the
+robot's Pinocchio visual model), read part by part with trimesh and drawn with fewer
+triangles: each part keeps its colour and about :data:`ROBOT_KEEP` of its triangles
+(quadric decimation, fast-simplification), shaded smooth except at sharp edges. The
+Panda's 135k triangles took 29 ms of each frame with software GL (headless chromium,
+a laptop without a GPU driver); its 21k look the same a few hundred pixels wide. Where
+they are placed is :meth:`tutor.robot.Arm.visual_placements`. They are recorded once
+per process as Meshcat commands so every scene reuses them. The rest are meshcat
+primitives drawn from a :class:`~tutor.tasks.pickplace.PickPlaceScene`: the obstacle
+boxes of :func:`tutor.robot.scene_obstacles` (table, tray, bin floor and walls), a
+stem per plant (its status ball is the drawing's, :mod:`tutor.views.scene3d`), and the
+hand marker, one ball for open and one for closed.
 """
 
 from __future__ import annotations
@@ -47,6 +51,11 @@ PLANT_BALL_SEGMENTS = (12, 8)
 PLANT_STEM_SEGMENTS = 8
 
 
+def hex_string(rgb) -> str:
+    """``(r, g, b)`` bytes as ``"#rrggbb"``."""
+    return "#" + "".join(f"{int(c):02x}" for c in rgb)
+
+
 def hex_colour(colour: str) -> int:
     """``"#rrggbb"`` as the integer meshcat's materials take."""
     return int(colour.lstrip("#"), 16)
@@ -65,26 +74,84 @@ class RobotMeshes:
 _ROBOT_LOCK = threading.Lock()
 
 
+#: the share of a robot part's triangles drawn (parts under ROBOT_SMALL_PART are whole)
+ROBOT_KEEP = 0.15
+ROBOT_SMALL_PART = 200
+
+
+def robot_parts(mesh_path: str, scale=(1.0, 1.0, 1.0), keep: float = ROBOT_KEEP):
+    """The coloured parts of one visual mesh file, decimated, in the file's frame.
+
+    Returns a list of ``(vertices (n, 3), faces (m, 3), normals (n, 3), colour)`` with
+    ``colour`` an ``"#rrggbb"`` string (the part's material colour).
+    """
+    import fast_simplification
+    import trimesh
+
+    file = trimesh.load(mesh_path, force="scene")
+    parts = []
+    for node in file.graph.nodes_geometry:
+        transform, name = file.graph[node]
+        mesh = file.geometry[name]
+        material = getattr(mesh.visual, "material", None)
+        rgb = getattr(material, "main_color", None)
+        colour = hex_string(rgb[:3]) if rgb is not None else "#e6ebed"
+        points = trimesh.transform_points(mesh.vertices, transform) * np.asarray(scale)
+        whole = trimesh.Trimesh(points, mesh.faces, process=True)  # shared corners merged
+        V, F = whole.vertices, whole.faces
+        if len(F) > ROBOT_SMALL_PART:
+            V, F = fast_simplification.simplify(
+                V.astype(np.float32), F.astype(np.int32), target_reduction=1.0 - keep
+            )
+        part = trimesh.Trimesh(V, F, process=True)
+        # no zero-area faces and no loose corners: their normals would be zero (black)
+        part.update_faces(part.nondegenerate_faces())
+        part.remove_unreferenced_vertices()
+        shaded = part.smooth_shaded
+        parts.append(
+            (
+                np.asarray(shaded.vertices, dtype=np.float32),
+                np.asarray(shaded.faces, dtype=np.uint32),
+                np.asarray(shaded.vertex_normals, dtype=np.float32),
+                colour,
+            )
+        )
+    return parts
+
+
+def _with_normals(geometry, normals):
+    """A meshcat ``TriangularMeshGeometry`` that also sends its vertex ``normals``."""
+    from meshcat.geometry import pack_numpy_array
+
+    lower = geometry.lower
+
+    def lowered(object_data):
+        data = lower(object_data)
+        data["data"]["attributes"]["normal"] = pack_numpy_array(normals.T)
+        return data
+
+    geometry.lower = lowered
+    return geometry
+
+
 @lru_cache(maxsize=2)
 def _robot_meshes(name: str) -> RobotMeshes:
-    import contextlib
-    import io
-    import warnings
-
     import meshcat
-    from pinocchio.visualize import MeshcatVisualizer
+    import meshcat.geometry as mg
 
     from ..robot import load_robot
 
     robot = load_robot(name)
     rec = SceneRecorder()
-    viz = MeshcatVisualizer(robot.model, None, robot.visual_model)
-    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
-        warnings.simplefilter("ignore")
-        viz.initViewer(viewer=meshcat.Visualizer(window=rec))
-        viz.loadViewerModel(rootNodeName="robot")
-    objects = tuple(c for c in rec.commands() if c[0] == "set_object")
+    vis = meshcat.Visualizer(window=rec)
     names = tuple(f"robot/visuals/{g.name}" for g in robot.visual_model.geometryObjects)
+    for node, geom in zip(names, robot.visual_model.geometryObjects, strict=True):
+        for k, (V, F, N, colour) in enumerate(robot_parts(geom.meshPath, geom.meshScale)):
+            vis[node][f"part{k}"].set_object(
+                _with_normals(mg.TriangularMeshGeometry(V, F), N),
+                mg.MeshPhongMaterial(color=hex_colour(colour), shininess=30),
+            )
+    objects = tuple(c for c in rec.commands() if c[0] == "set_object")
     gz = frame_commands(objects)
     return RobotMeshes(objects, gz, base64.b64encode(gz).decode("ascii"), names)
 
