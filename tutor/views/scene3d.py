@@ -31,10 +31,10 @@ Two ways to show it
 ``mode="static"``
     No server. In the notebook, meshcat's viewer runs in an iframe inside a widget
     and gets the scene over the widget's comm: all of it when a browser opens the
-    view (about 4 MB with the Panda's meshes compressed), then only what changed
+    view (about 0.5 MB with the Panda's meshes compressed), then only what changed
     after each step (a few kB, or ~0.3 MB with an animation), so the camera stays
     where the trainee turned it. :meth:`Scene3D.static_html` gives the scene as one
-    self-contained page (meshcat's script inside; about 6 MB) and
+    self-contained page (meshcat's script inside; about 1.5 MB) and
     :meth:`Scene3D.save_html` writes it to a file. Works in Voila, on Binder or
     JupyterHub, from ``file://`` and in CI.
 
