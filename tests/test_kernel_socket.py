@@ -63,3 +63,69 @@ def test_a_connection_the_user_configured_stands(tmp_path):
         text = log.read_text()
     assert "kernel websockets left as ZMQChannelsWebsocketConnection" in text, text[-2000:]
     assert "without Nagle's delay" not in text
+
+
+#: the kernel's side: a burst of comm messages, far more than ZeroMQ's default queue
+BURST = """
+from comm import create_comm
+_c = create_comm(target_name="lfd-burst")
+for _i in range({n}):
+    _c.send({{"i": _i, "pad": "x" * 2000}})
+"""
+
+
+def _burst_received(connection_class, n: int = 20_000) -> tuple[int, int]:
+    """A real kernel sends ``n`` comm messages while the server's side of the connection
+    (``connection_class``'s channels) reads nothing for 4 s, as a busy event loop would;
+    returns (the iopub socket's receive high-water mark, comm messages then received)."""
+    import asyncio
+    import time
+
+    from jupyter_client import BlockingKernelClient
+    from jupyter_client.session import Session
+    from jupyter_server.services.kernels.kernelmanager import ServerKernelManager
+
+    loop = asyncio.new_event_loop()  # the server's loop (its streams are made on it)
+    asyncio.set_event_loop(loop)
+    km = ServerKernelManager(kernel_name="python3")  # the server's kind of kernel manager
+    loop.run_until_complete(km.start_kernel())
+    client = BlockingKernelClient()
+    client.load_connection_info(km.get_connection_info())
+    client.start_channels()
+    try:
+        client.wait_for_ready(timeout=120)
+        connection = connection_class(parent=km)
+        connection.create_stream()
+        iopub = connection.channels["iopub"].socket
+        time.sleep(1.0)  # the subscription is in place before the burst
+        client.execute(BURST.format(n=n))
+        time.sleep(4.0)
+        received = 0
+        while iopub.poll(500):
+            _, parts = Session().feed_identities(iopub.recv_multipart())
+            received += json.loads(parts[1])["msg_type"] == "comm_msg"
+        hwm = iopub.rcvhwm
+        for stream in connection.channels.values():
+            stream.close()
+        return hwm, received
+    finally:
+        client.stop_channels()
+        loop.run_until_complete(km.shutdown_kernel(now=True))
+        asyncio.set_event_loop(None)
+        loop.close()
+
+
+def test_a_burst_of_kernel_messages_is_never_dropped():
+    """ZeroMQ drops a publisher's messages once the subscriber's queue (1000 by default)
+    and the socket's buffers are full: with Jupyter Server's own connection most of a
+    20 000-message burst is lost while the server does not read; with the tutor's, none."""
+    from jupyter_server.services.kernels.connection.channels import (
+        ZMQChannelsWebsocketConnection,
+    )
+
+    from tutor.kernel_socket import NoDelayKernelConnection
+
+    hwm, received = _burst_received(NoDelayKernelConnection)
+    assert hwm == 0 and received == 20_000, (hwm, received)
+    hwm, received = _burst_received(ZMQChannelsWebsocketConnection)
+    assert hwm == 1000 and received < 20_000, (hwm, received)  # what the fix is for

@@ -18,10 +18,22 @@ loads no server extensions, takes it from ``etc/jupyter/voila.json``
 (``Voila.kernel_websocket_connection_class``). ``scripts/env.sh`` copies both into the
 environment's ``etc/jupyter``, and the wheel installs them. It imports nothing of the
 tutor (the server stays light).
+
+It also lets the server's subscription to a kernel's output (IOPub) queue without bound.
+ZeroMQ's default high-water mark is 1000 messages a socket: when the server's event loop
+is busy (a loaded machine, a room on one hub) while the kernel sends a burst, the
+subscription fills and the kernel's publisher then *drops* messages silently. Building a
+pick-and-place run sends about 1400 widget messages in a fraction of a second; one lost
+message (the stage's children, a status "idle") left a run's tutor missing from the page
+for good (seen in CI under load, three times). With no high-water mark on the
+subscribing side, ZeroMQ's I/O thread, which runs without the server's event loop or
+Python's lock, keeps draining the kernel's messages into the server's memory until the
+loop reads them; the server holds them for the browser in any case.
 """
 
 from __future__ import annotations
 
+import zmq
 from jupyter_server.services.kernels.connection.channels import (
     ZMQChannelsWebsocketConnection,
 )
@@ -44,6 +56,17 @@ class NoDelayKernelConnection(ZMQChannelsWebsocketConnection):
         if handler is not None and handler.ws_connection is not None:
             handler.set_nodelay(True)
         return super().connect()
+
+    def create_stream(self):
+        """The kernel's channels as Jupyter Server opens them, never dropping output."""
+        unbounded_queues(self.kernel_manager.context)
+        return super().create_stream()
+
+
+def unbounded_queues(context: zmq.Context) -> None:
+    """Let the sockets ``context`` opens from now on queue received messages without
+    bound (no receive high-water mark), so that a kernel's burst is never dropped."""
+    context.setsockopt(zmq.RCVHWM, 0)
 
 
 def _jupyter_server_extension_points() -> list[dict]:

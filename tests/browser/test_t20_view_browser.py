@@ -120,12 +120,22 @@ WS_LOG = r"""
     window.__wsLog.push(Math.round(performance.now()) + ' ' + dir + ' ' + kind(d));
     if (window.__wsLog.length > 4000) window.__wsLog.shift();
   };
+  // only the kernels' sockets (not the server's events socket, nor meshcat's)
+  const kernel = (ws) => /\/api\/kernels\//.test(ws.url);
   const desc = Object.getOwnPropertyDescriptor(WebSocket.prototype, 'onmessage');
   Object.defineProperty(WebSocket.prototype, 'onmessage', {
-    set(f) { desc.set.call(this, (ev) => { log('in', ev.data); return f.call(this, ev); }); },
+    set(f) {
+      desc.set.call(this, (ev) => {
+        if (kernel(this)) log('in', ev.data);
+        return f.call(this, ev);
+      });
+    },
     get() { return desc.get.call(this); } });
   const send = WebSocket.prototype.send;
-  WebSocket.prototype.send = function (d) { log('out', d); return send.call(this, d); };
+  WebSocket.prototype.send = function (d) {
+    if (kernel(this)) log('out', d);
+    return send.call(this, d);
+  };
 })();
 """
 

@@ -86,6 +86,9 @@ def _set(obj, name: str, value) -> None:
         setattr(obj, name, value)
 
 
+#: the frame of the selected plant's button and of the others
+SELECTED_BORDER, UNSELECTED_BORDER = "3px solid #111111", "1px solid #ffffff"
+
 MISTAKES = {"no mistake": None, "wrong plant": "wrong_plant", "sloppy grab": "sloppy_grab"}
 
 
@@ -169,10 +172,16 @@ class PickPlaceTutor(TutorApp):
         self.selected = 44
         rows, cols = self.task.scene.rows, self.task.scene.cols
         self.plant_buttons = [
-            w.Button(
-                description="",
+            w.Button(  # made as most plants are first drawn: each change is a message
+                description=TRAY_GLYPHS["unknown"],
                 tooltip=f"{self.task.plant_name(i)}: {STATUS_WORDS['unknown']}",
-                layout=w.Layout(width="26px", height="26px", padding="0"),
+                style={
+                    "button_color": TRAY_COLOURS["unknown"],
+                    "text_color": TRAY_TEXT["unknown"],
+                },
+                layout=w.Layout(
+                    width="26px", height="26px", padding="0", border=UNSELECTED_BORDER
+                ),
             )
             for i in range(rows * cols)
         ]
@@ -575,16 +584,19 @@ class PickPlaceTutor(TutorApp):
             if hint:
                 words += "; the robot would learn most from here next (hint)"
             tip = f"{self.task.plant_name(i)}: {words}" + (" (selected)" if selected else "")
-            _set(b.style, "button_color", TRAY_COLOURS[kind])
-            _set(b.style, "text_color", TRAY_TEXT[kind])
-            _set(b, "description", TRAY_GLYPHS[kind] + (HINT_GLYPH if hint else ""))
-            _set(b, "tooltip", tip)
-            _set(b.layout, "border", "3px solid #111111" if selected else "1px solid #ffffff")
-            for css, on in (("lfd-selected", selected), ("lfd-hint", hint)):
-                if on:
-                    b.add_class(css)
-                else:
-                    b.remove_class(css)
+            # one message per widget that changed, not one per trait (a burst of hundreds
+            # of messages is what a busy page or server falls behind on)
+            with b.hold_sync(), b.style.hold_sync(), b.layout.hold_sync():
+                _set(b.style, "button_color", TRAY_COLOURS[kind])
+                _set(b.style, "text_color", TRAY_TEXT[kind])
+                _set(b, "description", TRAY_GLYPHS[kind] + (HINT_GLYPH if hint else ""))
+                _set(b, "tooltip", tip)
+                _set(b.layout, "border", SELECTED_BORDER if selected else UNSELECTED_BORDER)
+                for css, on in (("lfd-selected", selected), ("lfd-hint", hint)):
+                    if on:
+                        b.add_class(css)
+                    else:
+                        b.remove_class(css)
 
     def current_hint(self):
         """HF's next-demo hint while the run is open (None in the other conditions, once
