@@ -14,7 +14,8 @@ import pandas as pd
 import pytest
 
 from tutor.errors import InvalidFileError, InvalidParameterError
-from tutor.study.cohort import EXPERIMENTS, simulate_teacher
+from tutor.framework.protocol import EXPERIMENTS
+from tutor.study.cohort import simulate_teacher
 from tutor.study.report import analyse, load_result, load_robustness, seeds_report
 
 REWRITE = "lfd-tutor reproduce --experiment {e} --seed 0 --out tutor/assets/cohorts"
@@ -23,7 +24,7 @@ REWRITE = "lfd-tutor reproduce --experiment {e} --seed 0 --out tutor/assets/coho
 @pytest.mark.parametrize(("experiment", "teachers"), [(1, (0, 17)), (2, (0, 20))])
 def test_bundled_rows_are_what_the_simulation_gives(experiment, teachers):
     bundled = load_result(experiment)
-    n = EXPERIMENTS[experiment]["n"]
+    n = EXPERIMENTS[experiment].n_teachers
     assert bundled.seed == 0 and bundled.runs.teacher.nunique() == n
     for teacher in teachers:
         rows, _ = simulate_teacher(experiment, teacher, 0, n, settings=bundled.settings)

@@ -22,7 +22,7 @@ from tutor.tasks.hint import (
 from tutor.tasks.lookahead import State, best_next
 from tutor.tasks.optimal_reference import optimal_reference
 from tutor.tasks.pickplace import PickPlaceTask
-from tutor.tasks.pickplace_protocol import ALL_CONDITIONS, EXTRA_CONDITIONS, PickPlaceRun
+from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.teachers.pickplace import PickPlaceTeacher
 from tutor.teachers.traits import DEFAULT_POPULATION, Population, TeacherTraits
 
@@ -44,8 +44,10 @@ def demonstrated(task, plants, condition="HF", seed=0) -> PickPlaceRun:
 
 
 def test_hf_is_nf_plus_a_hint_beyond_the_paper(task):
-    assert EXTRA_CONDITIONS == {"AF": "adaptive", "HF": "none"}
-    assert list(ALL_CONDITIONS)[-2:] == ["AF", "HF"]
+    design = PickPlaceRun.protocol()
+    assert design.extra_codes == ("AF", "HF") and design.codes[-2:] == ("AF", "HF")
+    hf = design.condition("HF")
+    assert hf.policy.silent and hf.hinted and not hf.paper and hf.paper_code == "NF"
     run = PickPlaceRun("HF", task)
     assert run.hinted and not PickPlaceRun("NF", task).hinted
     assert run.feedback_seconds == 0.0

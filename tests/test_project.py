@@ -283,7 +283,7 @@ def test_lab_listens_on_loopback_only(tmp_path: Path):
 def test_paper_numbers_agree_with_their_copies():
     """The set-up values the tasks, the teachers and the study hold are tutor.paper's."""
     from tutor import paper
-    from tutor.study.cohort import EXPERIMENTS
+    from tutor.framework.protocol import EXPERIMENTS
     from tutor.tasks.maze import load_layout
     from tutor.tasks.maze_rules import RULE_RADIUS
     from tutor.tasks.pickplace import load_scene
@@ -307,11 +307,11 @@ def test_paper_numbers_agree_with_their_copies():
     assert scene.realisation_seconds == paper.PICKPLACE_REALISATION_SECONDS
     assert scene.run_seconds == paper.PICKPLACE_RUN_SECONDS
 
-    assert EXPERIMENTS[1]["conditions"] == paper.MAZE_CONDITIONS
-    assert EXPERIMENTS[1]["n"] == paper.EXPERIMENT_1["n"] == paper.MAZE_N_TEACHERS
-    assert EXPERIMENTS[2]["conditions"] == paper.PICKPLACE_CONDITIONS
-    assert EXPERIMENTS[2]["n"] == paper.EXPERIMENT_2["n"] == paper.PICKPLACE_N_TEACHERS
-    assert EXPERIMENTS[2]["runs"] == paper.PICKPLACE_N_RUNS
+    assert EXPERIMENTS[1].paper_codes == paper.MAZE_CONDITIONS
+    assert EXPERIMENTS[1].n_teachers == paper.EXPERIMENT_1["n"] == paper.MAZE_N_TEACHERS
+    assert EXPERIMENTS[2].paper_codes == paper.PICKPLACE_CONDITIONS
+    assert EXPERIMENTS[2].n_teachers == paper.EXPERIMENT_2["n"] == paper.PICKPLACE_N_TEACHERS
+    assert EXPERIMENTS[2].runs == paper.PICKPLACE_N_RUNS
     # the paper's "about 180 %", "about 169 %" and "about 220 %"
     assert paper.EXPERIMENT_1["relative"]["VF/NF"] == pytest.approx(1.8, abs=0.05)
     assert paper.EXPERIMENT_2["relative"]["mean"] == pytest.approx(1.69, abs=0.01)

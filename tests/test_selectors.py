@@ -18,7 +18,7 @@ from tutor.framework.selectors import (
     select,
 )
 from tutor.tasks.pickplace import PickPlaceTask, load_scene
-from tutor.tasks.pickplace_protocol import ALL_CONDITIONS, CONDITIONS, PickPlaceRun
+from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.tpgmm import TPGMM, Frame, frame_disagreement, frame_views
 
 TRAY = load_scene().plant_positions  # (100, 3), index = row * 10 + col; z is constant
@@ -254,8 +254,10 @@ def test_af_costs_what_bf_costs(task):
     assert af.elapsed == pytest.approx(bf.elapsed)
     assert (af.selector.name, af.k) == ("disagreement", 5)
     assert PickPlaceRun("AF", task, k=2).feedback_seconds == 50.0
-    assert list(CONDITIONS) == ["NF", "RF", "BF", "SF"]  # the paper's four, unchanged
-    assert list(ALL_CONDITIONS) == ["NF", "RF", "BF", "SF", "AF", "HF"]
+    design = PickPlaceRun.protocol()
+    assert design.paper_codes == ("NF", "RF", "BF", "SF")  # the paper's four, unchanged
+    assert design.codes == ("NF", "RF", "BF", "SF", "AF", "HF")
+    assert design.condition("AF").selector == ("disagreement", 5)
 
 
 @pytest.mark.parametrize("selector", ["random", "disagreement"])
@@ -375,13 +377,12 @@ def test_the_selector_benchmark_runs_and_reports_every_selector(tmp_path):
 
 def test_the_maze_va_run_shows_k_start_points_and_is_read_as_vf():
     from tutor.tasks.maze import MazeTask
-    from tutor.tasks.maze_run import CONDITIONS as MAZE_PAPER
     from tutor.tasks.maze_run import MazeRun
     from tutor.teachers.maze import MazeTeacher
     from tutor.teachers.traits import DEFAULT_POPULATION
 
     task = MazeTask()
-    assert list(MAZE_PAPER) == ["NF", "VF", "VR"]  # the paper's three, unchanged
+    assert MazeRun.protocol().paper_codes == ("NF", "VF", "VR")  # the paper's three
     traits = DEFAULT_POPULATION.sample(np.random.default_rng(0))
     run = MazeTeacher(traits, task).teach("VA", np.random.default_rng(1), k=3)
     assert all(len(r.shown) == 3 for r in run.session.history)

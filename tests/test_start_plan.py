@@ -8,10 +8,12 @@ import json
 import pytest
 
 from tutor.framework.assignment import ClassPlan
+from tutor.framework.protocol import EXPERIMENTS
 from tutor.framework.record import RunRecord
 from tutor.runtime import session_dir
-from tutor.tasks.pickplace_protocol import CONDITIONS
 from tutor.views.start import maze_experiment, pick_and_place_experiment
+
+CONDITIONS = EXPERIMENTS[2].paper_codes
 
 PLAN = "trainee,condition\nAna,RF\nBen,sf\nstudent07,NF\nZoë,balanced\n"
 

@@ -15,7 +15,7 @@ from tutor.framework import RunOverError
 from tutor.framework.assignment import ClassPlan, load_plan
 from tutor.framework.record import RunRecord
 from tutor.tasks.pickplace import PickPlaceTask
-from tutor.tasks.pickplace_protocol import CONDITIONS, PickPlaceRun
+from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.views.hand import (
     DEFAULT_HAND,
     HAND_ENV,
@@ -32,6 +32,8 @@ from tutor.views.worked_example import (
     controls_step,
     instruction_widget,
 )
+
+CONDITIONS = PickPlaceRun.protocol().paper_codes
 
 
 def form():

@@ -131,11 +131,11 @@ def test_the_rule_comes_from_the_experiment_never_a_default():
     with pytest.raises(InvalidParameterError):
         rule_of(True)
 
-    class Unnamed(TeachingRun):  # a run class that forgot its experiment
-        conditions = {"NF": "none"}
+    class Unnamed(TeachingRun):  # a run class that forgot its experiment: no conditions,
+        pass  # no rule (the registry names none for experiment 0)
 
-    with pytest.raises(InvalidParameterError, match="scoring rule"):
-        Unnamed.new("NF", MazeTask()).score()
+    with pytest.raises(InvalidParameterError, match="experiment must be one of"):
+        Unnamed.new("NF", MazeTask())
     session = _teach(1).session
     with pytest.raises(TypeError):
         session.score()  # a session does not know its experiment: the rule must be named

@@ -63,6 +63,16 @@ class FeedbackPolicy:
     totals: bool
     description: str
 
+    @property
+    def silent(self) -> bool:
+        """Nothing is shown while the teacher teaches (NF, HF)."""
+        return self.name == "none"
+
+    @property
+    def adaptive(self) -> bool:
+        """A selector picks r after each demo (AF, VA)."""
+        return self.name == "adaptive"
+
     def shown(self, n: int, own: int, batch, selected) -> np.ndarray:
         if self.name == "all":
             return np.arange(n)

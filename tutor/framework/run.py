@@ -11,12 +11,13 @@ and a Load that replaces the run, close the current attempt and start a new one,
 :meth:`TeachingRun.restore` brings an earlier attempt back as a new one. Nothing a
 trainee did is deleted.
 
-A task's protocol subclasses :class:`TeachingRun` and names its conditions (the paper's
-NF/VF/VR for the maze, NF/RF/BF/SF for pick-and-place) with the feedback mode of each
-(what the set :math:`r` of shown realisations is; see :mod:`tutor.framework.session`).
-A condition in ``"adaptive"`` mode (AF, beyond the paper) names its selector and k in
-:attr:`TeachingRun.adaptive`; each demo's picks are stored in its ``Demo.shown``, so a
-saved run replays with the same :math:`r` whatever the selector (even a random one).
+A task's protocol subclasses :class:`TeachingRun` and names its experiment; the
+experiment's conditions, and the feedback policy of each (what the set :math:`r` of shown
+realisations is; see :mod:`tutor.framework.session`), come from the registry
+:mod:`tutor.framework.protocol`. A condition in ``"adaptive"`` mode (AF, beyond the
+paper) names its selector and k there; each demo's picks are stored in its
+``Demo.shown``, so a saved run replays with the same :math:`r` whatever the selector
+(even a random one).
 """
 
 from __future__ import annotations
@@ -38,6 +39,8 @@ from ..fileio import read_json, write_json
 from ..limits import MAX_DEMOS_PER_RUN
 from .feedback import reveal
 from .metrics import rule_of
+from .protocol import Condition, Experiment
+from .protocol import experiment as registered_experiment
 from .record import (
     Attempt,
     Demo,
@@ -99,12 +102,8 @@ class TeachingRun:
         The record is for another task or condition, or a demo in it cannot be replayed.
     """
 
-    #: the experiment number in the paper
+    #: the experiment number in the paper (its conditions: :mod:`.protocol`)
     experiment: ClassVar[int] = 0
-    #: condition name -> feedback mode
-    conditions: ClassVar[dict[str, str]] = {}
-    #: "adaptive" conditions: condition -> (selector name, k) (:mod:`.selectors`)
-    adaptive: ClassVar[dict[str, tuple[str, int]]] = {}
 
     def __init__(
         self, task: Task, record: RunRecord, clock=utc_now, *, selector=None, k=None, rng=None
@@ -158,10 +157,16 @@ class TeachingRun:
         return cls(task, record, clock, **adaptive)
 
     @classmethod
+    def protocol(cls) -> Experiment:
+        """The run's experiment in the registry (its task, conditions and design)."""
+        return registered_experiment(cls.experiment)
+
+    @classmethod
     def check_condition(cls, condition) -> str:
-        if not isinstance(condition, str) or condition not in cls.conditions:
+        codes = cls.protocol().codes
+        if not isinstance(condition, str) or condition not in codes:
             raise InvalidParameterError(
-                f"condition must be one of {', '.join(cls.conditions)}, got {condition!r}"
+                f"condition must be one of {', '.join(codes)}, got {condition!r}"
             )
         return condition
 
@@ -171,10 +176,10 @@ class TeachingRun:
                 f"this file holds a {record.task!r} run of experiment {record.experiment}, "
                 f"not a {self.task.name!r} run of experiment {self.experiment}"
             )
-        if record.condition not in self.conditions:
+        if record.condition not in self.protocol().codes:
             raise InvalidFileError(
                 f"the run's condition {record.condition!r} is not one of "
-                f"{', '.join(self.conditions)}"
+                f"{', '.join(self.protocol().codes)}"
             )
 
     # ------------------------------------------------------------ what the run is
@@ -189,8 +194,14 @@ class TeachingRun:
         return self._record.condition
 
     @property
+    def protocol_condition(self) -> Condition:
+        """The run's condition in the registry (:mod:`.protocol`)."""
+        return self.protocol().condition(self.condition)
+
+    @property
     def feedback(self) -> str:
-        return self.conditions[self.condition]
+        """The name of the condition's feedback policy."""
+        return self.protocol_condition.policy.name
 
     @property
     def attempt(self) -> Attempt:
@@ -237,7 +248,7 @@ class TeachingRun:
         batch = self.batch() if self.feedback == "batch" else None
         if self.feedback != "adaptive":
             return TeachingSession(self.task, feedback=self.feedback, batch=batch)
-        selector, k = self.adaptive.get(self.condition, (None, None))
+        selector, k = self.protocol_condition.selector or (None, None)
         options = self._adaptive_options
         return TeachingSession(
             self.task,

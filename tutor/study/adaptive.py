@@ -57,6 +57,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InvalidParameterError
+from ..framework.protocol import EXPERIMENTS
 from ..teachers.traits import DEFAULT_POPULATION, Population, TeacherTraits
 from ..workers import one_blas_thread, process_pool
 from .cohort import StudySettings, _rng, _task, rows_of
@@ -186,9 +187,7 @@ def is_secondary(policy: str) -> bool:
 def policy_available(policy: Policy) -> bool:
     """Whether this tutor can teach ``policy`` (HF needs the HF condition and the
     ``compliance`` trait, added beside this study)."""
-    from ..tasks.pickplace_protocol import ALL_CONDITIONS
-
-    if policy.condition not in ALL_CONDITIONS:
+    if policy.condition not in EXPERIMENTS[2].codes:
         return False
     if policy.compliance is not None:
         return "compliance" in {f.name for f in dataclasses.fields(TeacherTraits)}

@@ -27,10 +27,10 @@ import pandas as pd
 
 from .. import paper
 from ..errors import SaveError
+from ..framework.protocol import EXPERIMENTS
 from ..framework.wording import NOT_A_NUMBER, plural, sentence
 from . import stats
 from .classroom import ClassResult
-from .cohort import EXPERIMENTS
 from .report import _jsonable, check_out_dir, load_result, test_lines
 from .tables import has_no_number, readable_label, readable_table
 
@@ -54,7 +54,7 @@ BESIDE_LEGEND = (
 
 
 def _counts(runs: pd.DataFrame, experiment: int) -> dict[str, int]:
-    conditions = EXPERIMENTS[experiment]["conditions"]
+    conditions = EXPERIMENTS[experiment].paper_codes
     if runs.empty:
         return dict.fromkeys(conditions, 0)
     per = runs.groupby("condition", observed=False)["teacher"].nunique()
@@ -82,7 +82,7 @@ def too_small(runs: pd.DataFrame, experiment: int) -> str:
 
 def descriptive_table(runs: pd.DataFrame, experiment: int) -> pd.DataFrame:
     """Per condition: trainees, runs, η (median, mean), demos, ε, and the failures."""
-    conditions = list(EXPERIMENTS[experiment]["conditions"])
+    conditions = list(EXPERIMENTS[experiment].paper_codes)
     if runs.empty:
         return pd.DataFrame(index=conditions, columns=["trainees", "runs"]).fillna(0)
     g = runs.groupby("condition", observed=False)
@@ -169,7 +169,7 @@ def analyse_class(result: ClassResult, seed: int = 0) -> dict:
         "class": _tests(whole, exp),
         "simulated": {**_tests(simulated_runs, exp), "runs": simulated_runs},
     }
-    conditions = list(EXPERIMENTS[exp]["conditions"])
+    conditions = list(EXPERIMENTS[exp].paper_codes)
     measure = "median eta" if exp == 1 else "mean eta"
     ref = paper.EXPERIMENT_1["median_eta"] if exp == 1 else paper.EXPERIMENT_2["mean_eta"]
     sim = descriptive_table(simulated_runs, exp)

@@ -47,12 +47,13 @@ import pandas as pd
 
 from ..errors import InvalidFileError, InvalidParameterError, LimitError, TutorError
 from ..framework.assignment import ClassPlan, load_plan
+from ..framework.protocol import EXPERIMENTS
 from ..framework.record import RunRecord
 from ..framework.wording import plural, sentence
 from ..runtime import headless
 from ..workers import one_blas_thread, process_pool
 from .class_files import ZIP_AGAIN, close_zips, hidden, list_class, read_run_file
-from .cohort import EXPERIMENTS, StudySettings, _task, rows_of
+from .cohort import StudySettings, _task, rows_of
 
 __all__ = [
     "ClassResult",
@@ -226,8 +227,8 @@ class ClassResult:
     def trainees(self) -> pd.DataFrame:
         """One row per trainee with a file of this experiment: key, name, counted runs,
         demos in them, runs not counted and what the trainee still lacks."""
-        conditions = EXPERIMENTS[self.experiment]["conditions"]
-        want_runs = EXPERIMENTS[self.experiment]["runs"]
+        conditions = EXPERIMENTS[self.experiment].paper_codes
+        want_runs = EXPERIMENTS[self.experiment].runs
         mine = [f for f in self.files if f.trainee_key and f.kind != "other experiment"]
         rows = []
         for key in sorted({f.trainee_key for f in mine} | set(self.roster)):
@@ -389,13 +390,13 @@ def _check(label: str, read, experiment: int, again: str = ""):
         reason = f"an Experiment {record.experiment} run: read it with --experiment "
         return FileOutcome(label, "other experiment", reason + str(record.experiment), **info), None
     spec = EXPERIMENTS[experiment]
-    if record.condition not in spec["conditions"] or record.task != spec["task"]:
+    if record.condition not in spec.paper_codes or record.task != spec.task:
         return (
             FileOutcome(
                 label,
                 "not a run record",
                 f"its task {record.task!r} and condition {record.condition!r} are not "
-                f"Experiment {experiment}'s ({spec['task']}: {', '.join(spec['conditions'])})",
+                f"Experiment {experiment}'s ({spec.task}: {', '.join(spec.paper_codes)})",
                 **info,
             ),
             None,
@@ -413,7 +414,7 @@ def _replay(item):
     label, record, experiment, settings = item
     spec = EXPERIMENTS[experiment]
     try:
-        run = RUN_CLASSES[experiment]().from_record(_task(spec["task"], settings), record)
+        run = RUN_CLASSES[experiment]().from_record(_task(spec.task, settings), record)
     except LimitError as exc:  # too many demos to replay: said before any is
         return label, "cannot be replayed", f"{sentence(exc)} {ASK_AGAIN}", None, []
     except TutorError as exc:
@@ -624,7 +625,7 @@ def _roster(path: Path, plan, experiment: int) -> dict:
         return {}
     if not isinstance(plan, ClassPlan):
         # the plan assigns Experiment 2's conditions; for Experiment 1 it is a roster
-        plan = load_plan(plan, EXPERIMENTS[2]["conditions"], 2)
+        plan = load_plan(plan, EXPERIMENTS[2].paper_codes, 2)
     return {key: (plan.names[key], plan.table[key][0]) for key in plan.table}
 
 
@@ -752,7 +753,7 @@ def _score(path: Path, experiment: int, outcomes, settings) -> ClassResult:
                 rows.append({"teacher": 0, **who, "file": outcome.file, **row})
                 demo_rows += [{"teacher": 0, **who, **d} for d in extra]
         files.append(outcome)
-    order = list(EXPERIMENTS[experiment]["conditions"])
+    order = list(EXPERIMENTS[experiment].paper_codes)
     runs, demos = pd.DataFrame(rows), pd.DataFrame(demo_rows)
     for frame in (runs, demos):
         if frame.empty:

@@ -36,13 +36,14 @@ import pandas as pd
 
 from ..errors import InvalidParameterError
 from ..framework.failures import Thresholds, is_ambiguous
+from ..framework.protocol import EXPERIMENTS
+from ..framework.protocol import experiment as experiment_of
 from ..teachers.traits import DEFAULT_POPULATION, Population
 from ..workers import one_blas_thread, process_pool
 from .limits import MAX_SEED, MAX_TEACHERS
 
 __all__ = [
     "CohortResult",
-    "EXPERIMENTS",
     "StudySettings",
     "run_experiment",
     "simulate_teacher",
@@ -54,10 +55,6 @@ __all__ = [
     "check_conditions",
 ]
 
-EXPERIMENTS = {
-    1: {"task": "maze", "conditions": ("NF", "VF", "VR"), "n": 30, "runs": 1},
-    2: {"task": "pickplace", "conditions": ("NF", "RF", "BF", "SF"), "n": 36, "runs": 3},
-}
 
 
 
@@ -71,13 +68,10 @@ def check_conditions(experiment: int, conditions=None) -> tuple[str, ...]:
     InvalidParameterError
         Not a sequence of distinct known conditions of the experiment.
     """
-    paper = EXPERIMENTS[experiment]["conditions"] if experiment in EXPERIMENTS else ()
+    design = experiment_of(experiment)
     if conditions is None:
-        return tuple(paper)
-    if experiment == 2:
-        from ..tasks.pickplace_protocol import ALL_CONDITIONS as known
-    else:
-        from ..tasks.maze_run import ALL_CONDITIONS as known
+        return design.paper_codes
+    known = design.codes
     if isinstance(conditions, str):
         conditions = (conditions,)
     try:
@@ -158,22 +152,22 @@ def check_request(experiment, n=None, seed=0, conditions=None) -> tuple[int, int
     ``conditions`` (Experiment 2, see :func:`check_conditions`) changes how many
     teachers there must be: a multiple of the number of conditions, 2 each at least.
     """
-    if experiment not in EXPERIMENTS:
+    if isinstance(experiment, bool) or experiment not in EXPERIMENTS:
         raise InvalidParameterError(
             f"experiment must be 1 (maze) or 2 (pick-and-place), got {experiment!r}"
         )
     spec = EXPERIMENTS[experiment]
     chosen = check_conditions(experiment, conditions)
-    n = spec["n"] if n is None and conditions is None else n
+    n = spec.n_teachers if n is None and conditions is None else n
     if n is None:  # the paper's 9 per condition
-        n = spec["n"] // len(spec["conditions"]) * len(chosen)
+        n = spec.n_teachers // len(spec.paper_codes) * len(chosen)
     if not isinstance(n, int | np.integer) or isinstance(n, bool):
         raise InvalidParameterError(f"the number of teachers must be an integer, got {n!r}")
     k, smallest = len(chosen), min_teachers(experiment, chosen)
     if n > MAX_TEACHERS:
         raise InvalidParameterError(
             f"Experiment {experiment} can simulate at most {MAX_TEACHERS} teachers (100 times "
-            f"the paper's cohort), got n = {n}; give a smaller n (the paper used {spec['n']})"
+            f"the paper's cohort), got n = {n}; give a smaller n (the paper used {spec.n_teachers})"
         )
     if experiment == 1 and n < smallest:
         raise InvalidParameterError(
@@ -288,21 +282,21 @@ def teach_runs(
     Experiment 2: runs 1-3 of the teacher's condition, ``teacher // (n / k)`` of the k
     ``conditions``, by default the paper's four).
     """
-    spec = {**EXPERIMENTS[experiment], "conditions": check_conditions(experiment, conditions)}
+    chosen = check_conditions(experiment, conditions)
     traits = population.sample(_rng(seed, experiment, teacher, 0))
     if experiment == 1:
         from ..teachers.maze import MazeTeacher
 
         model = MazeTeacher(traits, _task("maze", settings))
-        for k, cond in enumerate(spec["conditions"], start=1):
+        for k, cond in enumerate(chosen, start=1):
             yield traits, 1, model.teach(cond, _rng(seed, experiment, teacher, k))
     else:
         from ..teachers.pickplace import PickPlaceTeacher
 
-        per = n // len(spec["conditions"])
-        cond = spec["conditions"][teacher // per]
+        per = n // len(chosen)
+        cond = chosen[teacher // per]
         model = PickPlaceTeacher(traits, _task("pickplace", settings))
-        for k in range(1, spec["runs"] + 1):
+        for k in range(1, EXPERIMENTS[experiment].runs + 1):
             yield traits, k, model.teach(cond, _rng(seed, experiment, teacher, k))
 
 

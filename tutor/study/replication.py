@@ -31,14 +31,14 @@ import pandas as pd
 from scipy.stats import binom
 
 from ..errors import InvalidParameterError
+from ..framework.protocol import EXPERIMENTS
 from . import paper
-from .cohort import EXPERIMENTS
 from .stats import experiment2_ranking
 
 __all__ = ["teacher_totals", "replication_rates", "chance_of_at_least"]
 
 COUNTS = ("errors", "undemonstrated", "ambiguous")
-CONDITIONS = EXPERIMENTS[2]["conditions"]
+CONDITIONS = EXPERIMENTS[2].paper_codes
 #: the conclusions a bootstrap can recompute (the ANOVA is not redone per draw)
 CONCLUSIONS = ("BF best", "BF fewest ambiguous", "BF most undemonstrated", "RF fewest errors")
 

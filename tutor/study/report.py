@@ -13,10 +13,11 @@ import pandas as pd
 from .. import paper
 from ..errors import InvalidFileError, InvalidParameterError, SaveError
 from ..fileio import check_path_length
+from ..framework.protocol import EXPERIMENTS
 from ..framework.wording import percent
 from ..resources import asset
 from . import replication, stats
-from .cohort import EXPERIMENTS, CohortResult, StudySettings, check_request, run_experiment
+from .cohort import CohortResult, StudySettings, check_request, run_experiment
 from .limits import MAX_SEEDS
 from .tables import readable_table
 
@@ -417,7 +418,7 @@ def load_result(experiment: int, folder=None) -> CohortResult:
             f"{summary_path} is not the summary `lfd-tutor {command}` writes ({exc}); "
             "write it again with that command"
         ) from exc
-    order = list(EXPERIMENTS[experiment]["conditions"])
+    order = list(EXPERIMENTS[experiment].paper_codes)
     for frame in (runs, demos):
         if "condition" not in frame or not frame["condition"].isin(order).all():
             raise InvalidFileError(
@@ -447,7 +448,7 @@ def seeds_report(table: pd.DataFrame, experiment: int) -> str:
     :func:`robustness_summary` (the seeds where each conclusion holds).
     """
     experiment = _check_experiment(experiment)
-    conds = EXPERIMENTS[experiment]["conditions"]
+    conds = EXPERIMENTS[experiment].paper_codes
     first, last = int(table["seed"].min()), int(table["seed"].max())
     kind, ref = (
         ("median", paper.EXPERIMENT_1["median_eta"])

@@ -17,29 +17,20 @@ VA  visual feedback, adaptive: after every demo the robot shows only the k = 5 s
 from __future__ import annotations
 
 from ..framework import TeachingRun
+from ..framework.protocol import experiment
 from ..framework.session import FeedbackRecord
 from .maze_rules import RuleAdvice, advise, followed
 
-__all__ = ["MazeRun", "ADAPTIVE", "ALL_CONDITIONS", "CONDITIONS", "EXTRA_CONDITIONS", "PHASE_ORDER"]
+__all__ = ["MazeRun", "PHASE_ORDER"]
 
-#: the paper's three conditions (condition -> feedback mode)
-CONDITIONS = {"NF": "none", "VF": "all", "VR": "all"}
-#: conditions beyond the paper
-EXTRA_CONDITIONS = {"VA": "adaptive"}
-#: every condition a maze run can be in
-ALL_CONDITIONS = {**CONDITIONS, **EXTRA_CONDITIONS}
-#: the adaptive conditions' selector and k
-ADAPTIVE = {"VA": ("disagreement", 5)}
-#: the paper's order of the three phases
-PHASE_ORDER = ("NF", "VF", "VR")
+#: the paper's order of the three phases (its conditions: :mod:`tutor.framework.protocol`)
+PHASE_ORDER = experiment(1).paper_codes
 
 
 class MazeRun(TeachingRun):
     """A maze run (see the module docstring); ``MazeRun.new("VF", MazeTask())``."""
 
     experiment = 1
-    conditions = ALL_CONDITIONS
-    adaptive = ADAPTIVE
 
     def advice(self) -> RuleAdvice:
         """VR: the rule that applies to the next demo."""

@@ -50,6 +50,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, TutorError
 from ..framework import RunOverError, TeachingRun
+from ..framework.protocol import experiment
 from ..framework.record import check_given, utc_now
 from .hint import Hint, next_demo_hint
 from .kinesthetic import CARRY_SECONDS, PAUSE_SECONDS, REACH_SECONDS
@@ -57,12 +58,7 @@ from .pickplace import PickPlaceTask
 from .recording import check_recording
 
 __all__ = [
-    "ADAPTIVE",
-    "ALL_CONDITIONS",
     "ClockState",
-    "CONDITIONS",
-    "EXTRA_CONDITIONS",
-    "HINTED",
     "Hint",
     "PickPlaceRun",
     "RunOverError",
@@ -70,18 +66,8 @@ __all__ = [
     "SHORTEST_DEMO_SECONDS",
 ]
 
-#: the paper's four conditions (condition -> feedback mode), in the paper's order
-CONDITIONS = {"NF": "none", "RF": "replay", "BF": "batch", "SF": "selected"}
-#: conditions beyond the paper (offered as extras, never by default)
-EXTRA_CONDITIONS = {"AF": "adaptive", "HF": "none"}
-#: every condition a run can be in
-ALL_CONDITIONS = {**CONDITIONS, **EXTRA_CONDITIONS}
-#: the adaptive conditions' selector and k (k = 5 plants: BF's cost)
-ADAPTIVE = {"AF": ("disagreement", 5)}
-#: the conditions that show the next-demo hint (:meth:`PickPlaceRun.hint`)
-HINTED = ("HF",)
-#: each trainee teaches three runs in their condition
-RUNS = 3
+#: each trainee teaches three runs in their condition (:mod:`tutor.framework.protocol`)
+RUNS = experiment(2).runs
 #: The shortest demonstration a person gives (s): the simulated hand's fastest pace
 #: (0.85 of the average, less 5 %) over the reach, the transport and both button
 #: presses, rounded down. Less time than this (plus the condition's attempts) left
@@ -245,13 +231,11 @@ class PickPlaceRun(TeachingRun):
 
     An AF run takes ``selector=``, ``k=`` and ``rng=`` (the random selectors'
     generator) besides the record options; by default AF shows 5 plants picked by
-    frame disagreement (:data:`ADAPTIVE`). An HF run (:data:`HINTED`) offers
+    frame disagreement (its selector in :mod:`tutor.framework.protocol`). An HF run offers
     :meth:`hint` before each demo.
     """
 
     experiment = 2
-    conditions = ALL_CONDITIONS
-    adaptive = ADAPTIVE
 
     def __init__(self, condition=None, task: PickPlaceTask | None = None, record=None, **new):
         task = PickPlaceTask() if task is None else task
@@ -379,7 +363,7 @@ class PickPlaceRun(TeachingRun):
     @property
     def hinted(self) -> bool:
         """Whether this run's condition shows the next-demo hint (HF)."""
-        return self.condition in HINTED
+        return self.protocol_condition.hinted
 
     def _hint_key(self) -> tuple[int, int, int]:
         """What the hint depends on: the attempt, the demos taken back, the demos."""

@@ -29,11 +29,8 @@ from ..tasks.maze_run import MazeRun
 from .model import SIMULATED, TeacherModel, simulated_clock
 from .traits import TeacherTraits
 
-__all__ = ["MazeTeacher", "MAZE_CONDITIONS", "ALL_MAZE_CONDITIONS", "SLIP_SHIFTS"]
+__all__ = ["MazeTeacher", "SLIP_SHIFTS"]
 
-MAZE_CONDITIONS = {"NF": "none", "VF": "all", "VR": "all"}
-#: with VA (beyond the paper): only the k start points a selector picks are shown
-ALL_MAZE_CONDITIONS = {**MAZE_CONDITIONS, "VA": "adaptive"}
 #: how a slip bends the stroke: guide point index -> shift (m); each cuts an obstacle corner
 SLIP_SHIFTS = {0: (-0.05, 0.03), 2: (0.05, 0.03)}
 RATE_HZ = 80.0  #: the paper's tracker rate
@@ -83,18 +80,14 @@ class MazeTeacher:
         "patience". Maze teachers never take a demo back (the paper's maze protocol has
         no undo).
         """
-        if condition not in ALL_MAZE_CONDITIONS:
-            raise InvalidParameterError(
-                f"maze condition must be one of {', '.join(ALL_MAZE_CONDITIONS)}, "
-                f"got {condition!r}"
-            )
-        if adaptive and ALL_MAZE_CONDITIONS[condition] != "adaptive":
+        policy = MazeRun.protocol().condition(condition).policy
+        if adaptive and not policy.adaptive:
             raise InvalidParameterError(
                 f"selector= and k= are only for the adaptive conditions, not {condition}"
             )
         task, t = self.task, self.traits
         rng = np.random.default_rng(rng)
-        if ALL_MAZE_CONDITIONS[condition] == "adaptive":
+        if policy.adaptive:
             adaptive["rng"] = rng.spawn(1)[0]
         zone, margin = task.layout.start_zone, 0.001
         lower = np.array([zone.x0 + margin, zone.y0 + margin])

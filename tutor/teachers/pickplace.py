@@ -39,14 +39,11 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..tasks.pickplace import PickPlaceTask
-from ..tasks.pickplace_protocol import ALL_CONDITIONS, CONDITIONS, HINTED, PickPlaceRun
+from ..tasks.pickplace_protocol import PickPlaceRun
 from .model import SIMULATED, TeacherModel, simulated_clock
 from .traits import TeacherTraits
 
-__all__ = ["PickPlaceTeacher", "PICKPLACE_CONDITIONS", "NOVICE_TEST_NEAR", "MAX_RETRIES"]
-
-#: the paper's four conditions (AF and HF, beyond the paper, are in ALL_CONDITIONS)
-PICKPLACE_CONDITIONS = tuple(CONDITIONS)
+__all__ = ["PickPlaceTeacher", "NOVICE_TEST_NEAR", "MAX_RETRIES"]
 #: SF: share of a novice's test choices that are a demonstrated plant or its neighbour
 NOVICE_TEST_NEAR = 0.8
 #: how many times in a row a teacher redoes a demo the robot was seen failing
@@ -106,26 +103,22 @@ class PickPlaceTeacher:
         slipped), the undo events (retries) and the attempt's ``stopped`` ("satisfied",
         "patience" or "time").
         """
-        if condition not in ALL_CONDITIONS:
-            raise InvalidParameterError(
-                f"pick-and-place condition must be one of {', '.join(ALL_CONDITIONS)}, "
-                f"got {condition!r}"
-            )
-        if adaptive and ALL_CONDITIONS[condition] != "adaptive":
+        spec = PickPlaceRun.protocol().condition(condition)
+        if adaptive and not spec.policy.adaptive:
             raise InvalidParameterError(
                 f"selector= and k= are only for the adaptive conditions, not {condition}"
             )
         rng = np.random.default_rng(rng)
         t = self.traits
         if run is None:
-            if ALL_CONDITIONS[condition] == "adaptive":
+            if spec.policy.adaptive:
                 adaptive["rng"] = rng.spawn(1)[0]
             run = PickPlaceRun(
                 condition, self.task, trainee=SIMULATED, clock=simulated_clock, **adaptive
             )
         model = self._model(rng)
         model.lessons = list(self.lessons)
-        hinted = condition in HINTED
+        hinted = spec.hinted
         retry, tries = None, 0
         why_stopped = "time"
         while not run.finished:
@@ -173,7 +166,7 @@ class PickPlaceTeacher:
                 why_stopped = "patience"
                 break
         run.finish(why_stopped)
-        if ALL_CONDITIONS[condition] == "none" and run.session.n_demos:
+        if spec.policy.silent and run.session.n_demos:
             # NF (and HF): self-chosen realisations only after the run, as novices do
             self._self_test(run, model, rng, always=True)
         self.lessons = list(model.belief.failures_seen)

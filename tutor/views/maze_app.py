@@ -26,14 +26,14 @@ from ..framework.wording import percent
 from ..paper import PAPER_MEDIAN_ETA
 from ..runtime import headless
 from ..tasks.maze import MazeTask
-from ..tasks.maze_run import CONDITIONS, MazeRun
+from ..tasks.maze_run import MazeRun
 from ..tasks.optimal_reference import optimal_reference
 from .app import TutorApp, guarded
 from .payloads import check_stroke
 from .sketchpad import Sketchpad, layout_spec
 from .text import compose, finish_summary, optimal_sentence
 
-__all__ = ["MazeTutor", "CONDITIONS", "PAPER_MEDIAN_ETA", "compare_runs", "plot_runs"]
+__all__ = ["MazeTutor", "PAPER_MEDIAN_ETA", "compare_runs", "plot_runs"]
 
 
 class MazeTutor(TutorApp):
@@ -228,8 +228,8 @@ class MazeTutor(TutorApp):
 
 def paper_condition(condition: str) -> str:
     """The paper's condition a maze run is compared with: its own, or for VA (beyond the
-    paper, adaptive feedback) VF."""
-    return condition if condition in PAPER_MEDIAN_ETA else "VF"
+    paper, adaptive feedback) VF (:mod:`tutor.framework.protocol`)."""
+    return MazeRun.protocol().condition(condition).paper_code
 
 
 def compare_runs(tutors) -> str:

@@ -674,20 +674,12 @@ class PickPlaceTutor(TutorApp):
             self.scene3d.update(run, status)
 
 
-#: the paper's condition each condition beyond it is compared with, and why
-BEYOND_THE_PAPER = {
-    "AF": ("BF", "costs the same"),
-    "HF": ("NF", "shows nothing either, only without the hint"),
-}
-
-
 def paper_condition(condition: str) -> str:
     """The paper's condition a run's score is compared with: its own; for AF (beyond the
     paper) BF, which shows as many robot attempts and so costs the same time; for HF
-    (beyond the paper) NF, which shows nothing either and lacks only the hint."""
-    if condition in PAPER_MEAN_ETA:
-        return condition
-    return BEYOND_THE_PAPER.get(condition, ("BF", ""))[0]
+    (beyond the paper) NF, which shows nothing either and lacks only the hint
+    (:mod:`tutor.framework.protocol`)."""
+    return PickPlaceRun.protocol().condition(condition).paper_code
 
 
 def compare_runs(tutors) -> str:
@@ -711,10 +703,9 @@ def compare_runs(tutors) -> str:
         )
     if not etas:
         return "\n".join(lines)
-    own = tutors[0].run.condition
-    cond = paper_condition(own)
-    why = BEYOND_THE_PAPER.get(own, (cond, "costs the same"))[1]
-    beyond = "" if cond == own else f" ({own} is beyond the paper; {cond} {why})"
+    spec = tutors[0].run.protocol_condition
+    own, cond = spec.code, spec.paper_code
+    beyond = "" if spec.paper else f" ({own} is beyond the paper; {cond} {spec.compared_why})"
     lines.append(
         f"\nYour mean η: {percent(np.mean(etas))}. The paper's 9 trainees in {cond}{beyond}: "
         f"mean {percent(PAPER_MEAN_ETA[cond])} over the runs, "

@@ -94,8 +94,7 @@ from ..runtime import (
     trainee_key,
 )
 from ..tasks.maze_run import PHASE_ORDER
-from ..tasks.pickplace_protocol import ALL_CONDITIONS, EXTRA_CONDITIONS, RUNS
-from ..tasks.pickplace_protocol import CONDITIONS as PICKPLACE_CONDITIONS
+from ..tasks.pickplace_protocol import RUNS, PickPlaceRun
 from .hand import HAND_SOURCES, HANDS, hand_and_source
 from .payloads import check_choice, check_text, safely
 from .worked_example import instruction_widget
@@ -140,26 +139,6 @@ NO_CONDITION = "Choose your condition first (the one your educator gave you), th
 #: the start form's checkbox for the guided hand, and the hand each of its values asks for
 GUIDED_CHECKBOX = "The tutor guides the arm for me (if you cannot use a mouse or keyboard)"
 CHECKBOX_HANDS = {True: "guided", False: "own"}
-#: what each condition's button says on hover; AF's and HF's say they are beyond the paper
-CONDITION_TIPS = {
-    "NF": "NF: no feedback while teaching",
-    "RF": "RF: the robot replays the plant you demonstrated",
-    "BF": "BF: the robot tries five sample plants after each demo",
-    "SF": "SF: you choose which plants the robot tries",
-    "AF": "AF (beyond the paper): the robot tries the five plants it picks itself",
-    "HF": "HF (beyond the paper): no feedback, but a hint of where to demonstrate next",
-}
-#: the line under the condition buttons that says what AF and HF are
-BEYOND_THE_PAPER = (
-    "AF and HF are beyond the paper. AF, adaptive feedback: after each demonstration the "
-    "robot tries the five plants it finds least certain (where what it learnt from the "
-    "start, the plant and the bin disagrees, or far from your demonstrations), at BF's "
-    "cost. HF, a next-demo hint: as in NF you see nothing while teaching, but the tutor "
-    "names the plant the robot would learn most from next (it costs no time). "
-    "The paper's four conditions are NF, RF, BF and SF."
-)
-
-
 def condition_from_env() -> str | None:
     """Experiment 2's condition set by the educator in ``TUTOR_CONDITION``, or None.
 
@@ -172,10 +151,11 @@ def condition_from_env() -> str | None:
     value = env_text("TUTOR_CONDITION")
     if not value:
         return None
-    if value.upper() not in ALL_CONDITIONS:
+    design = PickPlaceRun.protocol()
+    if value.upper() not in design.codes:
         raise InvalidParameterError(
             f"TUTOR_CONDITION is {value!r}, which is not a condition of Experiment 2: set it "
-            f"to one of {', '.join(PICKPLACE_CONDITIONS)} (or {', '.join(EXTRA_CONDITIONS)}, "
+            f"to one of {', '.join(design.paper_codes)} (or {', '.join(design.extra_codes)}, "
             "beyond the paper; or unset it to let trainees choose)."
         )
     return value.upper()
@@ -613,23 +593,23 @@ class PickPlaceExperiment(StartForm):
         super().__init__(start)
 
     def _condition_fields(self) -> list:
+        design = PickPlaceRun.protocol()
         try:
             self._fixed_condition = condition_from_env()
         except InvalidParameterError as exc:
             self._condition_problem = f"{exc} Ask your educator."
         if self._fixed_condition is None and self._condition_problem is None:
             try:
-                self.class_plan = plan_from_env(tuple(PICKPLACE_CONDITIONS), hands=HANDS)
+                self.class_plan = plan_from_env(design.paper_codes, hands=HANDS)
             except InvalidPlanError as exc:
                 text = str(exc)
                 self._condition_problem = f"{text[:1].upper()}{text[1:]} Ask your educator."
         locked = self._fixed_condition is not None or self.class_plan is not None
-        options = [*PICKPLACE_CONDITIONS, *EXTRA_CONDITIONS]  # the paper's four first
         self.condition_buttons = w.ToggleButtons(
-            options=options,
+            options=design.codes,  # the paper's four first
             value=self._fixed_condition,  # None: nothing is preselected
             description="Condition",
-            tooltips=[CONDITION_TIPS[c] for c in options],
+            tooltips=[c.tip for c in design.conditions],
             style={"button_width": "56px"},
             disabled=locked,
         )
@@ -637,7 +617,7 @@ class PickPlaceExperiment(StartForm):
         self.condition_prompt = w.HTML()
         self.condition_prompt.add_class("lfd-start-condition-prompt")
         self.condition_buttons.observe(lambda _: self._condition_changed(), names="value")
-        self.beyond_note = w.HTML(f"<small>{html.escape(BEYOND_THE_PAPER)}</small>")
+        self.beyond_note = w.HTML(f"<small>{html.escape(design.beyond_note)}</small>")
         self.beyond_note.add_class("lfd-start-beyond")
         self.guided_box = self._hand_field()
         self._follow_plan()
@@ -792,15 +772,16 @@ class PickPlaceExperiment(StartForm):
 
     def started_conditions(self, name: str) -> list[str]:
         """The conditions in which ``name``'s folder holds counted (not practice) runs, in
-        the order of :data:`ALL_CONDITIONS`."""
+        the experiment's order (:mod:`tutor.framework.protocol`)."""
         found = counted_runs(name, self.experiment)
-        return [c for c in ALL_CONDITIONS if c in found]
+        return [c for c in PickPlaceRun.protocol().codes if c in found]
 
     def warning(self, name: str) -> str | None:
         """Counted runs of ``name`` in another condition than the one chosen: the class
         analysis counts one condition per trainee, so the trainee must confirm."""
         found = counted_runs(name, self.experiment)
-        others = [c for c in ALL_CONDITIONS if c in found and c != self.condition]
+        codes = PickPlaceRun.protocol().codes
+        others = [c for c in codes if c in found and c != self.condition]
         if not others:
             return None
         held = " and ".join(f"{c} ({_runs_said(*found[c])})" for c in others)
