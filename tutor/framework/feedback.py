@@ -41,7 +41,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FeedbackPolicy", "FEEDBACK_POLICIES", "Visibility", "reveal", "check_indices"]
+from ..errors import InvalidParameterError
+
+__all__ = [
+    "FeedbackPolicy",
+    "FEEDBACK_POLICIES",
+    "Visibility",
+    "check_indices",
+    "register_policy",
+    "reveal",
+]
 
 
 def check_indices(indices, n: int) -> np.ndarray:
@@ -50,49 +59,108 @@ def check_indices(indices, n: int) -> np.ndarray:
     return np.unique(idx[(idx >= 0) & (idx < n)])
 
 
-@dataclass(frozen=True)
 class FeedbackPolicy:
-    """One way of choosing r (see the module's table).
+    """One way of choosing r (see the module's table); a subclass per policy.
 
     ``shown(n, own, batch, selected)`` gives r as indices into B^: ``n`` = |B^|, ``own``
-    the index of the demo's own condition, ``batch`` the fixed subset, ``selected`` the
-    conditions asked for (SF) or picked by the selector (adaptive).
+    the index of the demo's own condition (-1 when the policy does not use it, see
+    :attr:`uses_own`), ``batch`` the fixed subset, ``selected`` the conditions asked for
+    (SF) or picked by the selector (adaptive).
+
+    Class attributes say what else the policy decides: whether the totals may be shown,
+    whether a selector picks r (and takes ``selector=``, ``k=``), whether it needs a batch,
+    whether each demo's r is kept as shown (a replay of the run shows the same r).
     """
 
-    name: str
-    totals: bool
-    description: str
-
-    @property
-    def silent(self) -> bool:
-        """Nothing is shown while the teacher teaches (NF, HF)."""
-        return self.name == "none"
-
-    @property
-    def adaptive(self) -> bool:
-        """A selector picks r after each demo (AF, VA)."""
-        return self.name == "adaptive"
+    #: the policy's name, as run records store it
+    name: str = ""
+    #: efficacy, its change, efficiency and the undemonstrated count may be shown
+    totals: bool = False
+    description: str = ""
+    #: r is the demo's own condition (the session finds its index)
+    uses_own: bool = False
+    #: r is the fixed batch, which the run must give
+    needs_batch: bool = False
+    #: a selector picks r after each demo
+    adaptive: bool = False
+    #: r was chosen when the demo was given (by the teacher or a selector): kept as shown
+    keeps_picks: bool = False
+    #: nothing is shown while the teacher teaches (NF, HF)
+    silent: bool = False
+    #: the teacher chooses which conditions the robot tries (SF)
+    teacher_picks: bool = False
 
     def shown(self, n: int, own: int, batch, selected) -> np.ndarray:
-        if self.name == "all":
-            return np.arange(n)
-        pick = {"replay": [own], "batch": batch, "selected": selected, "adaptive": selected}
-        pick = pick.get(self.name, [])
-        return np.asarray(pick, dtype=int).ravel().copy()
+        return np.zeros(0, dtype=int)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+class NoFeedback(FeedbackPolicy):
+    name, silent = "none", True
+    description = "no feedback until the run is over (NF)"
+
+
+class AllFeedback(FeedbackPolicy):
+    name, totals = "all", True
+    description = "every realisation after every demo (VF, VR)"
+
+    def shown(self, n, own, batch, selected):
+        return np.arange(n)
+
+
+class ReplayFeedback(FeedbackPolicy):
+    name, uses_own = "replay", True
+    description = "the demo's own condition replayed (RF)"
+
+    def shown(self, n, own, batch, selected):
+        return np.asarray([own], dtype=int)
+
+
+class BatchFeedback(FeedbackPolicy):
+    name, needs_batch = "batch", True
+    description = "a fixed batch of conditions after every demo (BF)"
+
+    def shown(self, n, own, batch, selected):
+        return np.asarray(batch, dtype=int).ravel().copy()
+
+
+class SelectedFeedback(FeedbackPolicy):
+    name, keeps_picks, teacher_picks = "selected", True, True
+    description = "the conditions the teacher asks for (SF)"
+
+    def shown(self, n, own, batch, selected):
+        return np.asarray(selected, dtype=int).ravel().copy()
+
+
+class AdaptiveFeedback(SelectedFeedback):
+    name, adaptive, teacher_picks = "adaptive", True, False
+    description = "k conditions a selector picks after every demo (AF)"
 
 
 #: the policies by name (the paper's five, then adaptive)
-FEEDBACK_POLICIES = {
+FEEDBACK_POLICIES: dict[str, FeedbackPolicy] = {
     p.name: p
     for p in (
-        FeedbackPolicy("none", False, "no feedback until the run is over (NF)"),
-        FeedbackPolicy("all", True, "every realisation after every demo (VF, VR)"),
-        FeedbackPolicy("replay", False, "the demo's own condition replayed (RF)"),
-        FeedbackPolicy("batch", False, "a fixed batch of conditions after every demo (BF)"),
-        FeedbackPolicy("selected", False, "the conditions the teacher asks for (SF)"),
-        FeedbackPolicy("adaptive", False, "k conditions a selector picks after every demo (AF)"),
+        NoFeedback(),
+        AllFeedback(),
+        ReplayFeedback(),
+        BatchFeedback(),
+        SelectedFeedback(),
+        AdaptiveFeedback(),
     )
 }
+
+
+def register_policy(policy: FeedbackPolicy) -> FeedbackPolicy:
+    """Add a policy (an instance of a :class:`FeedbackPolicy` subclass) by its name."""
+    if not isinstance(policy, FeedbackPolicy) or not policy.name:
+        raise InvalidParameterError(
+            f"register_policy takes a named FeedbackPolicy, got {policy!r}"
+        )
+    FEEDBACK_POLICIES[policy.name] = policy
+    return policy
 
 
 @dataclass(frozen=True)

@@ -70,6 +70,11 @@ class Condition:
         An ``"adaptive"`` policy's selector name and k (:mod:`.selectors`).
     hinted : bool
         The tutor names the plant (or start) the robot would learn most from next.
+    rules : bool
+        The tutor gives the paper's rule for where the next demonstration starts (VR).
+    example : str
+        The worked example's caption of what the trainee sees after a demo ("{plant}":
+        the plant the example demonstrates next).
     compared_with : str or None
         Beyond the paper: the paper's condition it is judged against.
     compared_why : str
@@ -82,6 +87,8 @@ class Condition:
     tip: str = ""
     selector: tuple[str, int] | None = None
     hinted: bool = False
+    rules: bool = False
+    example: str = ""
     compared_with: str | None = None
     compared_why: str = ""
 
@@ -195,6 +202,12 @@ _MAZE_TIPS = {
     "VR": "VR: every attempt, and the rule to follow for the next demonstration",
 }
 _PICKPLACE_POLICIES = {"NF": "none", "RF": "replay", "BF": "batch", "SF": "selected"}
+_PICKPLACE_EXAMPLES = {
+    "NF": "2. You see nothing more",
+    "RF": "2. The robot tries that plant",
+    "BF": "2. The robot tries five plants",
+    "SF": "2. You see the plants you test",
+}
 _PICKPLACE_TIPS = {
     "NF": "NF: no feedback while teaching",
     "RF": "RF: the robot replays the plant you demonstrated",
@@ -207,7 +220,10 @@ register(
         number=1,
         task="maze",
         conditions=(
-            *(Condition(c, _policy(_MAZE_POLICIES[c]), tip=_MAZE_TIPS[c]) for c in MAZE_CONDITIONS),
+            *(
+                Condition(c, _policy(_MAZE_POLICIES[c]), tip=_MAZE_TIPS[c], rules=c == "VR")
+                for c in MAZE_CONDITIONS
+            ),
             Condition(
                 "VA",
                 _policy("adaptive"),
@@ -234,7 +250,12 @@ register(
         task="pickplace",
         conditions=(
             *(
-                Condition(c, _policy(_PICKPLACE_POLICIES[c]), tip=_PICKPLACE_TIPS[c])
+                Condition(
+                    c,
+                    _policy(_PICKPLACE_POLICIES[c]),
+                    tip=_PICKPLACE_TIPS[c],
+                    example=_PICKPLACE_EXAMPLES[c],
+                )
                 for c in PICKPLACE_CONDITIONS
             ),
             Condition(
@@ -243,6 +264,7 @@ register(
                 paper=False,
                 tip="AF (beyond the paper): the robot tries the five plants it picks itself",
                 selector=("disagreement", 5),  # k = 5 plants: BF's cost
+                example="2. The robot tries five plants it picks",
                 compared_with="BF",
                 compared_why="costs the same",
             ),
@@ -252,6 +274,7 @@ register(
                 paper=False,
                 tip="HF (beyond the paper): no feedback, but a hint of where to demonstrate next",
                 hinted=True,
+                example="2. The hint: {plant} ★",
                 compared_with="NF",
                 compared_why="shows nothing either, only without the hint",
             ),

@@ -37,7 +37,7 @@ from ..errors import (
 )
 from ..fileio import read_json, write_json
 from ..limits import MAX_DEMOS_PER_RUN
-from .feedback import reveal
+from .feedback import FeedbackPolicy, reveal
 from .metrics import rule_of
 from .protocol import Condition, Experiment
 from .protocol import experiment as registered_experiment
@@ -199,9 +199,14 @@ class TeachingRun:
         return self.protocol().condition(self.condition)
 
     @property
+    def policy(self) -> FeedbackPolicy:
+        """The condition's feedback policy (what the teacher is shown)."""
+        return self.protocol_condition.policy
+
+    @property
     def feedback(self) -> str:
-        """The name of the condition's feedback policy."""
-        return self.protocol_condition.policy.name
+        """The name of the condition's feedback policy (as the record stores it)."""
+        return self.policy.name
 
     @property
     def attempt(self) -> Attempt:
@@ -245,8 +250,9 @@ class TeachingRun:
 
     def new_session(self) -> TeachingSession:
         """An empty session for this run's feedback mode."""
-        batch = self.batch() if self.feedback == "batch" else None
-        if self.feedback != "adaptive":
+        policy = self.policy
+        batch = self.batch() if policy.needs_batch else None
+        if not policy.adaptive:
             return TeachingSession(self.task, feedback=self.feedback, batch=batch)
         selector, k = self.protocol_condition.selector or (None, None)
         options = self._adaptive_options
@@ -267,12 +273,12 @@ class TeachingRun:
     @property
     def selector(self):
         """The selector of an ``"adaptive"`` condition (None in the others)."""
-        return self.session.selector if self.feedback == "adaptive" else None
+        return self.session.selector if self.policy.adaptive else None
 
     @property
     def k(self) -> int | None:
         """How many conditions an ``"adaptive"`` condition shows after each demo."""
-        return self.session.k if self.feedback == "adaptive" else None
+        return self.session.k if self.policy.adaptive else None
 
     def _replay(self, demos) -> TeachingSession:
         if len(demos) > MAX_DEMOS_PER_RUN:
@@ -286,7 +292,7 @@ class TeachingRun:
             try:
                 session.add_demo(
                     np.asarray(demo.samples, dtype=float),
-                    shown=demo.shown if self.feedback in ("selected", "adaptive") else None,
+                    shown=demo.shown if self.policy.keeps_picks else None,
                     condition=None if demo.condition is None else np.asarray(demo.condition),
                 )
             except TutorError as exc:
@@ -364,7 +370,7 @@ class TeachingRun:
         given = check_given(given)
         kept = None if recording is None else round_recording(_recording(recording))
         record = self.session.add_demo(raw, shown=shown, condition=condition)
-        if self.feedback == "adaptive":
+        if self.policy.adaptive:
             shown = record.shown  # the selector's picks, kept so that a replay shows them
         demo = Demo(
             samples=tuple(_floats(row) for row in self.session._demos[-1]),

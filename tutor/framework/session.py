@@ -138,13 +138,14 @@ class TeachingSession:
         k=None,
         rng=None,
     ):
-        if feedback not in FEEDBACK_MODES:
+        if not isinstance(feedback, str) or feedback not in FEEDBACK_POLICIES:
             raise InvalidParameterError(
-                f"feedback must be one of {', '.join(FEEDBACK_MODES)}; got {feedback!r}"
+                f"feedback must be one of {', '.join(FEEDBACK_POLICIES)}; got {feedback!r}"
             )
         n = len(task.conditions)
         batch = np.asarray([] if batch is None else batch, dtype=int).ravel()
-        if feedback == "batch" and batch.size == 0:
+        policy = FEEDBACK_POLICIES[feedback]
+        if policy.needs_batch and batch.size == 0:
             raise InvalidParameterError("feedback='batch' needs batch=[indices of B^ to show]")
         if np.any((batch < 0) | (batch >= n)):
             raise InvalidParameterError(
@@ -152,9 +153,11 @@ class TeachingSession:
             )
         self.task = task
         self.feedback = feedback
+        #: the feedback policy (:mod:`tutor.framework.feedback`) named by ``feedback``
+        self.policy = policy
         self.thresholds = Thresholds() if thresholds is None else thresholds
         self.batch = batch
-        if feedback != "adaptive" and (selector is not None or k is not None):
+        if not policy.adaptive and (selector is not None or k is not None):
             raise InvalidParameterError(
                 f"selector= and k= are only used with feedback='adaptive', not {feedback!r}"
             )
@@ -287,7 +290,7 @@ class TeachingSession:
         shown = [r.shown for r in self._history[number:]]
         for stack in self._stacks:
             del stack[number - 1 :]
-        keep = self.feedback in ("selected", "adaptive")  # what was shown stays what was shown
+        keep = self.policy.keeps_picks  # what was shown stays what was shown
         for demo, cond, sel in zip(later, later_conditions, shown, strict=True):
             self.add_demo(demo, shown=sel if keep else None, condition=cond)
         return self.latest
@@ -300,7 +303,7 @@ class TeachingSession:
     def _check_shown(self, shown) -> np.ndarray:
         if shown is None:
             return np.zeros(0, dtype=int)
-        if self.feedback not in ("selected", "adaptive"):
+        if not self.policy.keeps_picks:
             raise InvalidParameterError(
                 "shown= is only used with feedback='selected' (the conditions asked for) or "
                 "'adaptive' (the picks of a replayed demo)"
@@ -348,7 +351,7 @@ class TeachingSession:
             else np.zeros(len(conditions), dtype=bool)
         )
         undemonstrated = ~verdict.passed & ~demonstrated
-        if self.feedback == "adaptive" and not replayed:
+        if self.policy.adaptive and not replayed:
             selected = self._adaptive_picks(learner, conds, mean, verdict.passed)
         shown = self._shown(conds[-1], selected)
         delta_a = thr.ambiguity_distance
@@ -399,6 +402,6 @@ class TeachingSession:
 
     def _shown(self, condition, selected) -> np.ndarray:
         """r for this step, from the feedback policy (:mod:`tutor.framework.feedback`)."""
-        policy = FEEDBACK_POLICIES[self.feedback]
-        own = self.task.nearest_condition(condition) if policy.name == "replay" else -1
+        policy = self.policy
+        own = self.task.nearest_condition(condition) if policy.uses_own else -1
         return policy.shown(len(self.task.conditions), own, self.batch, selected)

@@ -121,9 +121,19 @@ class Policy:
     description: str = ""
 
     @property
+    def spec(self):
+        """The arm's condition in the registry (:mod:`tutor.framework.protocol`)."""
+        return EXPERIMENTS[2].condition(self.condition)
+
+    @property
+    def hinted(self) -> bool:
+        """The arm's teachers are offered the next-demo hint (HF)."""
+        return self.spec.hinted
+
+    @property
     def options(self) -> dict:
         """The keyword arguments of ``PickPlaceTeacher.teach`` for this arm."""
-        if self.condition == "AF":
+        if self.spec.policy.adaptive:
             return {"selector": self.selector, "k": self.k}
         return {}
 
@@ -181,7 +191,7 @@ VARIANT_SEEDS = 3
 def is_secondary(policy: str) -> bool:
     """The oracle (reference only) and the HF arms: run on fewer seeds when the plan says."""
     p = POLICIES[policy]
-    return p.reference or p.condition == "HF"
+    return p.reference or p.hinted
 
 
 def policy_available(policy: Policy) -> bool:
@@ -378,7 +388,7 @@ def _new_run(policy: Policy, task, rng: np.random.Generator):
     from ..teachers.model import SIMULATED, simulated_clock
 
     options = dict(policy.options)
-    if policy.condition == "AF":
+    if policy.spec.policy.adaptive:
         options["rng"] = rng.spawn(1)[0]
     return _traced_class()(
         policy.condition, task, trainee=SIMULATED, clock=simulated_clock, **options
@@ -495,7 +505,7 @@ class StudyResult:
 def jobs_of(plan: StudyPlan, settings: StudySettings = SETTINGS) -> list[tuple]:
     """Every unit of work of a (checked) plan: one teacher's runs in one arm."""
     def teachers(policy: str) -> range:
-        hinted = POLICIES[policy].condition == "HF" and plan.hf_teachers is not None
+        hinted = POLICIES[policy].hinted and plan.hf_teachers is not None
         return range(plan.hf_teachers if hinted else plan.n)
 
     def seeds(policy: str) -> range:
@@ -625,7 +635,7 @@ def run_study(
     jobs = sorted(
         (j for j in jobs_of(plan, settings) if j[:4] not in done),
         key=lambda j: (
-            j[0] != DEFAULT_VARIANT, is_secondary(j[3]), j[1], POLICIES[j[3]].condition != "HF"
+            j[0] != DEFAULT_VARIANT, is_secondary(j[3]), j[1], not POLICIES[j[3]].hinted
         ),
     )
     bar = None

@@ -202,7 +202,7 @@ def format_study_report(result: StudyResult, analysis: dict) -> str:
             f"NOT RUN: {', '.join(result.missing)} (this tutor has no HF condition or no "
             "compliance trait yet: the next-demo hint's arms are missing from this study)"
         )
-    hinted = [p for p in plan.policies if POLICIES[p].condition == "HF"]
+    hinted = [p for p in plan.policies if POLICIES[p].hinted]
     if hinted and plan.hf_teachers is not None and plan.hf_teachers < plan.n:
         lines.append(
             f"{', '.join(hinted)}: teachers 0-{plan.hf_teachers - 1} of each seed only (the "

@@ -307,7 +307,7 @@ def rows_of(run, base: dict, settings: StudySettings = StudySettings()):
         row, demo_rows = run_rows(run, base, None, settings.target)
         compliance = run.compliance
         row["followed_rules"] = (
-            float(np.mean(compliance)) if run.condition == "VR" and compliance else np.nan
+            float(np.mean(compliance)) if run.protocol_condition.rules and compliance else np.nan
         )
     else:
         row, demo_rows = run_rows(run, base, settings.pickplace_ambiguity, settings.target)

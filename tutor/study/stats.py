@@ -17,6 +17,7 @@ import warnings
 import numpy as np
 import pandas as pd
 
+from ..paper import PICKPLACE_BEST, PICKPLACE_CONDITIONS
 from . import paper
 
 __all__ = [
@@ -193,11 +194,12 @@ def relative_improvement(stats: dict, experiment: int) -> dict:
         med = stats["medians"]
         nf = med["NF"] if med["NF"] > 0 else np.nan
         return {"VF/NF": med["VF"] / nf, "VR/NF": med["VR"] / nf}
-    means = stats["means"]
-    others = np.mean([means[c] for c in ("NF", "RF", "SF")])
+    means, best = stats["means"], PICKPLACE_BEST
+    rest = [c for c in PICKPLACE_CONDITIONS if c != best]
+    others = np.mean([means[c] for c in rest])
     third = stats["by_run"][stats["by_run"].columns.max()]
-    others3 = np.mean([third[c] for c in ("NF", "RF", "SF")])
-    return {"mean": means["BF"] / others, "third run": third["BF"] / others3}
+    others3 = np.mean([third[c] for c in rest])
+    return {"mean": means[best] / others, "third run": third[best] / others3}
 
 
 def _p(pairs: pd.DataFrame, a: str, b: str) -> float:

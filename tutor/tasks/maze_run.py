@@ -43,7 +43,7 @@ class MazeRun(TeachingRun):
         maze demo is a stroke drawn on the sketchpad.
         """
         options.setdefault("given", "drawn")
-        if self.condition == "VR" and options.get("followed_rule") is None:
+        if self.protocol_condition.rules and options.get("followed_rule") is None:
             rule = self.advice()
             start = self.task.condition_of(self.task.preprocess(raw))
             options["followed_rule"] = followed(rule, start)

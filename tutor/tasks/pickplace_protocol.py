@@ -290,7 +290,7 @@ class PickPlaceRun(TeachingRun):
         125, AF 25 k, NF and SF 0: SF's tests are asked for and paid for one by one). The
         oracle selector may show fewer than k (only failures): this is then the most."""
         n = len(self.task.conditions)
-        adaptive = min(self.k, n) if self.feedback == "adaptive" else 0
+        adaptive = min(self.k, n) if self.policy.adaptive else 0
         shown = {"replay": 1, "batch": len(self.batch()), "adaptive": adaptive}
         shown = shown.get(self.feedback, 0)
         return self.realisation_seconds * shown
@@ -485,7 +485,7 @@ class PickPlaceRun(TeachingRun):
         """
         plants = [self._check_plant(p) for p in np.atleast_1d(plants)]
         after = self.finished
-        if not after and self.condition != "SF":
+        if not after and not self.policy.teacher_picks:
             raise RunOverError(
                 f"in condition {self.condition} the robot can be tested only after the run"
             )

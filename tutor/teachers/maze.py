@@ -80,7 +80,8 @@ class MazeTeacher:
         "patience". Maze teachers never take a demo back (the paper's maze protocol has
         no undo).
         """
-        policy = MazeRun.protocol().condition(condition).policy
+        spec = MazeRun.protocol().condition(condition)
+        policy = spec.policy
         if adaptive and not policy.adaptive:
             raise InvalidParameterError(
                 f"selector= and k= are only for the adaptive conditions, not {condition}"
@@ -101,7 +102,7 @@ class MazeTeacher:
         while True:
             m = session.n_demos
             advice = None
-            if condition == "VR":
+            if spec.rules:
                 rec = session.latest
                 advice = advise_from(task, None if rec is None else rec.passed, first_start)
                 start, why = self._follow(model, advice)

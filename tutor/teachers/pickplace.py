@@ -147,7 +147,7 @@ class PickPlaceTeacher:
             model.belief.demonstrate(plant)
             model.belief.observe(record.shown, record.passed[record.shown])
             fresh = set(record.shown.tolist())
-            if condition == "SF":
+            if spec.policy.teacher_picks:
                 fresh |= self._self_test(run, model, rng)
             # (a) watching the robot do the plant just shown: it fails, or the teacher
             # notices their demo went to another plant: take it back, show it again

@@ -130,7 +130,7 @@ class MazeTutor(TutorApp):
                 "again (this run is kept)."
             )
             return
-        advice = self.run.advice() if self.condition == "VR" else None
+        advice = self.run.advice() if self.run.protocol_condition.rules else None
         try:
             record = self.run.add_demo(raw)
         except TutorError as exc:
@@ -165,14 +165,14 @@ class MazeTutor(TutorApp):
         s, rec = self.session, self.session.latest
         vis = self.run.visibility()
         rule = None
-        if self.condition == "VR" and not self.finished:
+        if self.run.protocol_condition.rules and not self.finished:
             advice = self.run.advice()
             if advice.center is not None:
                 rule = {"center": advice.center.tolist(), "radius": advice.radius}
         if rec is None or not len(vis.shown):
             note = (
                 "No feedback in this run: press Finish when you are done."
-                if self.run.feedback == "none" and not vis.everything
+                if self.run.policy.silent and not vis.everything
                 else ""
             )
             self.pad.show(s.demos, rule_circle=rule, note=note)
@@ -193,7 +193,7 @@ class MazeTutor(TutorApp):
             f"<b>Condition {self.condition}</b>{practice} &middot; demonstrations: {s.n_demos}"
         ]
         rule = None
-        if self.condition == "VR" and not self.finished:
+        if self.run.protocol_condition.rules and not self.finished:
             rule = self.run.advice().message
         lines = compose(
             self.task, rec, vis, s.history, rule_message=rule, finished=self.finished

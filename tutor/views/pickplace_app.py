@@ -621,7 +621,7 @@ class PickPlaceTutor(TutorApp):
         status = tray_status(run, reveal=run.finished)
         hint = self.current_hint()
         self._draw_tray(status, rec, None if hint is None else hint.plant)
-        sf_or_after = run.condition == "SF" or run.finished
+        sf_or_after = run.policy.teacher_picks or run.finished
         busy = self.guiding  # while guiding, only Cancel guiding (and Enter) act
         self.buttons["Test plant"].disabled = (
             not sf_or_after or rec is None or self.read_only or busy

@@ -190,13 +190,14 @@ def _maze_frames(axes, condition: str) -> None:
     from .maze import draw_maze, realisations_at
 
     task = MazeTask()
+    spec = MazeRun.protocol().condition(condition)
     # VR: a teacher whose third demo starts inside the rules' circle; else the good one
-    demos = bundled_demos("maze_undemonstrated" if condition == "VR" else "maze_good")[:4]
+    demos = bundled_demos("maze_undemonstrated" if spec.rules else "maze_good")[:4]
     run = MazeRun.new(condition, task, trainee=Trainee.from_name("worked example"))
     advice = []
     for demo in demos:
         run.add_demo(demo)
-        advice.append(run.advice() if condition == "VR" else None)
+        advice.append(run.advice() if spec.rules else None)
     session = run.session
 
     def frame(ax, n_demos, realised, title):
@@ -226,10 +227,10 @@ def _maze_frames(axes, condition: str) -> None:
         ax.set_ylabel("")
 
     frame(axes[0], 1, False, "1. You draw a demonstration")
-    if condition == "NF":
+    if spec.policy.silent:
         frame(axes[1], 3, False, "2. You see only your own paths")
         frame(axes[2], 3, True, "3. After Finish: what it learned")
-    elif condition == "VF":
+    elif not spec.rules:
         frame(axes[1], 3, True, "2. Robot's tries: green ok, dark red fail")
         frame(axes[2], 4, True, "3. Demo 4 where they failed")
     else:
@@ -254,15 +255,16 @@ def _pickplace_frames(axes, condition: str) -> None:
     from ..tasks.pickplace_protocol import PickPlaceRun
 
     task = PickPlaceTask()
+    spec = PickPlaceRun.protocol().condition(condition)
     run = PickPlaceRun.new(condition, task, trainee=Trainee.from_name("worked example"))
     rng = np.random.default_rng(1)
     first, second = _EXAMPLE_PLANTS
     run.demonstrate(first, rng=rng)
     shown_after_first = _status(run, reveal=False)
-    hinted = run.hint().plant if condition == "HF" else None
+    hinted = run.hint().plant if spec.hinted else None
     if hinted is not None:  # the example follows the hint
         second = hinted
-    if condition == "SF":
+    if spec.policy.teacher_picks:
         run.test(list(_SF_TESTS))
         shown_after_first = _status(run, reveal=False)
     run.demonstrate(second, rng=rng)
@@ -271,16 +273,11 @@ def _pickplace_frames(axes, condition: str) -> None:
     demo_only = np.full(len(task.conditions), "unknown", dtype=object)
     demo_only[first] = "demo"
     _tray(axes[0], task, demo_only, f"1. You demonstrate {task.plant_name(first)}")
-    captions = {
-        "NF": "2. You see nothing more",
-        "RF": "2. The robot tries that plant",
-        "BF": "2. The robot tries five plants",
-        "SF": "2. You see the plants you test",
-        "AF": "2. The robot tries five plants it picks",
-        "HF": f"2. The hint: {task.plant_name(second)} ★",
-    }
-    _tray(axes[1], task, shown_after_first, captions[condition], hinted)
-    if condition in ("NF", "HF"):
+    caption = (spec.example or "2. What the robot shows you").format(
+        plant=task.plant_name(second)
+    )
+    _tray(axes[1], task, shown_after_first, caption, hinted)
+    if spec.policy.silent:
         _tray(axes[2], task, revealed, "3. After the run: every plant")
     else:
         _tray(axes[2], task, _status(run, reveal=False), "3. After the next demo")
