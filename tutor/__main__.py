@@ -26,6 +26,7 @@ import argparse
 import os
 import sys
 
+from .framework.protocol import EXPERIMENTS
 from .study.limits import MAX_SEED, MAX_SEEDS, MAX_TEACHERS
 
 # one BLAS thread per process (set before numpy loads); the cohort uses processes instead
@@ -67,6 +68,12 @@ class _OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+#: the --experiment choices' help, from the registry: "1 (maze) or 2 (pickplace)"
+EXPERIMENT_HELP = " or ".join(f"{e.number} ({e.title})" for e in EXPERIMENTS.values())
+#: the paper's cohort sizes, as --n's help gives them
+PAPER_SIZES = ", ".join(str(e.n_teachers) for e in EXPERIMENTS.values())
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = _OneLineParser(prog="lfd-tutor", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -76,14 +83,14 @@ def _parser() -> argparse.ArgumentParser:
             "--experiment",
             type=int,
             required=True,
-            choices=(1, 2),
-            help="1 (maze) or 2 (pick-and-place)",
+            choices=tuple(EXPERIMENTS),
+            help=EXPERIMENT_HELP,
         )
         p.add_argument(
             "--n",
             type=_whole_number(1, MAX_TEACHERS, " teachers"),
             default=None,
-            help=f"teachers (default the paper's: 30, 36; at most {MAX_TEACHERS})",
+            help=f"teachers (default the paper's: {PAPER_SIZES}; at most {MAX_TEACHERS})",
         )
         p.add_argument("--out", default="results", help="folder for the files (default results/)")
         p.add_argument(
@@ -147,8 +154,8 @@ def _parser() -> argparse.ArgumentParser:
         "--experiment",
         type=int,
         required=True,
-        choices=(1, 2),
-        help="1 (maze) or 2 (pick-and-place)",
+        choices=tuple(EXPERIMENTS),
+        help=EXPERIMENT_HELP,
     )
     cls.add_argument("--out", default=None, help="folder for CSV, JSON, report and figure")
     cls.add_argument(

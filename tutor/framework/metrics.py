@@ -36,7 +36,6 @@ __all__ = [
     "final_score",
     "run_score",
     "SCORING_RULES",
-    "EXPERIMENT_RULES",
     "rule_of",
 ]
 
@@ -111,23 +110,23 @@ SCORING_RULES = {"target": session_score, "final": final_score}
 
 
 #: the scoring rule of each of the paper's experiments (a run's rule comes from here)
-EXPERIMENT_RULES = {1: "target", 2: "final"}
-
-
 def rule_of(experiment) -> str:
-    """The scoring rule of the paper's ``experiment`` (1: ``"target"``, 2: ``"final"``).
+    """The scoring rule of the paper's ``experiment`` (1: ``"target"``, 2: ``"final"``),
+    as the registry (:mod:`tutor.framework.protocol`) holds it.
 
     Raises
     ------
     InvalidParameterError
         ``experiment`` is not 1 or 2.
     """
-    if isinstance(experiment, bool) or experiment not in EXPERIMENT_RULES:
+    from .protocol import EXPERIMENTS  # the registry reads the policies, not the metrics
+
+    if isinstance(experiment, bool) or experiment not in EXPERIMENTS:
         raise InvalidParameterError(
             f"experiment must be 1 (maze) or 2 (pick-and-place) to have a scoring rule, "
             f"got {experiment!r}"
         )
-    return EXPERIMENT_RULES[experiment]
+    return EXPERIMENTS[experiment].score_rule
 
 
 def run_score(efficacies, rule: str, target: float = 0.9) -> SessionScore:

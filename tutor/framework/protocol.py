@@ -109,6 +109,8 @@ class Experiment:
         1 (the maze) or 2 (pick-and-place), as in the paper.
     task : str
         The task's name (``Task.name``).
+    title : str
+        What a person calls it ("maze", "pick-and-place").
     conditions : tuple of Condition
         The paper's first, in the paper's order, then those beyond it.
     n_teachers : int
@@ -118,16 +120,22 @@ class Experiment:
         pick-and-place: three of one condition, between subjects).
     within_subjects : bool
         Every trainee teaches in every condition (Experiment 1).
+    score_rule : str
+        How a run is scored (:func:`tutor.framework.metrics.run_score`): ``"target"``,
+        the demos to first reach 90 % coverage (Experiment 1); ``"final"``, efficacy
+        after the last demo over the demos given (Experiment 2).
     beyond_note : str
         What the conditions beyond the paper are, in a trainee's words.
     """
 
     number: int
     task: str
+    title: str
     conditions: tuple[Condition, ...]
     n_teachers: int
     runs: int
     within_subjects: bool
+    score_rule: str
     beyond_note: str = ""
     _by_code: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -219,6 +227,7 @@ register(
     Experiment(
         number=1,
         task="maze",
+        title="maze",
         conditions=(
             *(
                 Condition(c, _policy(_MAZE_POLICIES[c]), tip=_MAZE_TIPS[c], rules=c == "VR")
@@ -237,6 +246,7 @@ register(
         n_teachers=MAZE_N_TEACHERS,
         runs=1,
         within_subjects=True,
+        score_rule="target",
         beyond_note=(
             "VA is beyond the paper: after each demonstration the robot shows the five "
             "attempts it finds least certain, instead of all of them as in VF."
@@ -248,6 +258,7 @@ register(
     Experiment(
         number=2,
         task="pickplace",
+        title="pick-and-place",
         conditions=(
             *(
                 Condition(
@@ -282,6 +293,7 @@ register(
         n_teachers=PICKPLACE_N_TEACHERS,
         runs=PICKPLACE_N_RUNS,
         within_subjects=False,
+        score_rule="final",
         beyond_note=(
             "AF and HF are beyond the paper. AF, adaptive feedback: after each demonstration "
             "the robot tries the five plants it finds least certain (where what it learnt "
