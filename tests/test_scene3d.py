@@ -612,3 +612,24 @@ def test_the_arm_is_example_robot_datas_meshes_with_fewer_triangles():
     meshes = robot_meshes("panda")
     paths = {c[1] for c in meshes.commands}
     assert all(any(p.startswith(f"/meshcat/{n}/") for p in paths) for n in meshes.node_names)
+
+
+def test_the_3d_view_shows_what_the_tray_shows(task):
+    """One rule decides what a trainee may see (the run's visibility): a practice run's
+    3-D view, like its tray, shows every plant's attempt after a demo; a counted BF run's
+    only the batch, until it is finished."""
+    from tutor.tasks.pickplace_protocol import PickPlaceRun
+    from tutor.views.pickplace_app import tray_status
+
+    for practice, counted in ((True, 100), (False, 5)):
+        run = PickPlaceRun("BF", task, practice=practice)
+        run.demonstrate(44, rng=np.random.default_rng(0))
+        scene = Scene3D(task, mode="static")
+        scene.update(run, tray_status(run))
+        drawn = len(scene._trails.get("passed", [])) + len(scene._trails.get("failed", []))
+        seen = int(np.isin(tray_status(run), ["pass", "fail"]).sum())
+        assert drawn == counted and seen >= counted - 1, (practice, drawn, seen)
+        run.finish()
+        scene.update(run, tray_status(run))
+        drawn = len(scene._trails.get("passed", [])) + len(scene._trails.get("failed", []))
+        assert drawn == 100

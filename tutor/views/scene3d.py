@@ -466,9 +466,10 @@ class Scene3D:
         demos = [d[:, -4:] for d in session.demos]
         self.draw_trails("demos", demos, DEMO)
         rec = session.latest
-        shown = run.shown_plants() if rec is not None else np.zeros(0, int)
-        if rec is not None and run.finished:
-            shown = np.arange(len(task.conditions))
+        shown = np.zeros(0, int)
+        if rec is not None:  # what the trainee may see: the run decides, as for the tray
+            vis = run.visibility()
+            shown = np.arange(len(task.conditions)) if vis.everything else vis.shown
         R = session.realisations if rec is not None else None
         ok = [p for p in shown if rec.passed[p]] if rec is not None else []
         bad = [p for p in shown if not rec.passed[p]] if rec is not None else []
