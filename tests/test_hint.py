@@ -263,7 +263,7 @@ def test_a_hint_that_fails_is_said_not_raised(task, monkeypatch):
 
 
 def test_the_start_form_offers_hf_and_the_educator_can_fix_it(person):
-    from tutor.views.start import condition_from_env, pick_and_place_experiment
+    from tutor.views.start_pickplace import condition_from_env, pick_and_place_experiment
 
     form = pick_and_place_experiment(scene3d=False)
     buttons = form.condition_buttons

@@ -76,7 +76,7 @@ def test_a_made_up_condition_is_one_entry_and_one_policy_class(made_up):
     from tutor.teachers.pickplace import PickPlaceTeacher
     from tutor.teachers.traits import DEFAULT_POPULATION
     from tutor.views.pickplace_app import paper_condition
-    from tutor.views.start import pick_and_place_experiment
+    from tutor.views.start_pickplace import pick_and_place_experiment
 
     # the start form offers it, with its tip
     form = pick_and_place_experiment(start=False, scene3d=False)

@@ -324,7 +324,7 @@ def test_the_cohort_runs_af_only_when_asked():
 
 
 def test_the_start_form_offers_af_after_the_papers_four(person):
-    from tutor.views.start import condition_from_env, pick_and_place_experiment
+    from tutor.views.start_pickplace import condition_from_env, pick_and_place_experiment
 
     form = pick_and_place_experiment(scene3d=False)
     buttons = form.condition_buttons

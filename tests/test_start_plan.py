@@ -11,7 +11,8 @@ from tutor.framework.assignment import ClassPlan
 from tutor.framework.protocol import EXPERIMENTS
 from tutor.framework.record import RunRecord
 from tutor.runtime import session_dir
-from tutor.views.start import maze_experiment, pick_and_place_experiment
+from tutor.views.start import maze_experiment
+from tutor.views.start_pickplace import pick_and_place_experiment
 
 CONDITIONS = EXPERIMENTS[2].paper_codes
 

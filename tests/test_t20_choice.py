@@ -25,7 +25,7 @@ from tutor.views.hand import (
     controls_html,
 )
 from tutor.views.pickplace_app import PickPlaceTutor
-from tutor.views.start import GUIDED_CHECKBOX, pick_and_place_experiment
+from tutor.views.start_pickplace import GUIDED_CHECKBOX, pick_and_place_experiment
 from tutor.views.worked_example import (
     PRACTICE_CONTROLS,
     TRY_THE_CONTROLS,

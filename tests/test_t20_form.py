@@ -1,5 +1,5 @@
 """Issue 20's polish of notebook 03: the start form never preselects a condition and
-warns about runs in another condition (tutor.views.start); the clock and the cap speak
+warns about runs in another condition (tutor.views.start_pickplace); the clock and the cap speak
 with one voice (tutor.tasks.pickplace_protocol.ClockState, tutor.views.pickplace_app)."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from tutor.framework import RunOverError
 from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import SHORTEST_DEMO_SECONDS, PickPlaceRun
 from tutor.views.pickplace_app import PickPlaceTutor
-from tutor.views.start import counted_runs, pick_and_place_experiment
+from tutor.views.start_pickplace import counted_runs, pick_and_place_experiment
 
 
 def form():

@@ -133,7 +133,7 @@ def test_a_good_upload_from_the_page_loads(maze_tutor, tmp_path):
 
 
 def test_the_start_form_says_what_is_wrong_with_what_the_page_sent(person):
-    from tutor.views.start import PickPlaceExperiment
+    from tutor.views.start_pickplace import PickPlaceExperiment
 
     form = PickPlaceExperiment(start=False, scene3d=False)
     form.name.value = "x" * 5000

@@ -77,7 +77,9 @@ def _write_notebook(folder) -> None:
             "Test copy of notebook 03 (tests/browser/test_own_hand_browser.py): one start "
             "form per condition; the trainee guides the arm with their own hand."
         ),
-        nbformat.v4.new_code_cell("from tutor.views.start import pick_and_place_experiment"),
+        nbformat.v4.new_code_cell(
+            "from tutor.views.start_pickplace import pick_and_place_experiment"
+        ),
     ]
     for c in CONDITIONS:
         cells.append(

@@ -109,7 +109,7 @@ def _write_pickplace_notebook(folder) -> None:
             "one start form per condition, no 3-D view."
         ),
         nbformat.v4.new_code_cell(
-            "import os\nfrom tutor.views.start import pick_and_place_experiment"
+            "import os\nfrom tutor.views.start_pickplace import pick_and_place_experiment"
         ),
     ]
     for name in FORMS:
