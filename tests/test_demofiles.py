@@ -463,7 +463,7 @@ def test_an_oversized_or_empty_upload_is_refused_unwritten(monkeypatch):
         tutor.message = ""
         observer({"new": (item,)})
         assert "arrived without its content" in tutor.message
-    monkeypatch.setattr("tutor.views.payloads.MAX_UPLOAD_BYTES", 8)
+    monkeypatch.setattr("tutor.payloads.MAX_UPLOAD_BYTES", 8)
     observer(upload("big.csv", CSV))
     assert "larger than the 8 bytes" in tutor.message and tutor.paths == []
 

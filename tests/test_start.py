@@ -9,9 +9,10 @@ import pytest
 
 from tutor.demofiles import bundled_demos
 from tutor.errors import InvalidParameterError
+from tutor.framework.protocol import run_file_name
 from tutor.framework.record import RunRecord
 from tutor.runtime import default_trainee, session_dir
-from tutor.views.start import HEADLESS_TRAINEE, maze_experiment, run_file_name
+from tutor.views.start import HEADLESS_TRAINEE, maze_experiment
 from tutor.views.start_pickplace import condition_from_env, pick_and_place_experiment
 from tutor.views.worked_example import example_png, instruction_text, instruction_widget
 

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from tutor.errors import InvalidPayloadError
+from tutor.payloads import MAX_GUIDE_SAMPLES, check_guide_end, check_guide_move
 from tutor.robot.follow import HandFollower, guide_limits
 from tutor.tasks.pickplace import PickPlaceTask
-from tutor.views.payloads import MAX_GUIDE_SAMPLES, check_guide_end, check_guide_move
 from tutor.views.scene3d import Scene3D
 from tutor.views.scene_guide import GuideEnd
 

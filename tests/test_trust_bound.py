@@ -11,7 +11,7 @@ import pytest
 
 from tutor.demofiles import bundled_demos, save_demos
 from tutor.errors import InvalidPayloadError
-from tutor.views.payloads import (
+from tutor.payloads import (
     MAX_STROKE_POINTS,
     check_choice,
     check_stroke,

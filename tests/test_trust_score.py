@@ -24,6 +24,7 @@ from matplotlib.patches import PathPatch, Rectangle
 from tutor.errors import InvalidParameterError
 from tutor.fileio import write_json
 from tutor.framework.metrics import rule_of
+from tutor.framework.protocol import run_file_name
 from tutor.framework.record import Trainee
 from tutor.framework.run import TeachingRun
 from tutor.framework.wording import percent
@@ -47,7 +48,6 @@ from tutor.teachers.maze import MazeTeacher
 from tutor.teachers.pickplace import PickPlaceTeacher
 from tutor.teachers.traits import DEFAULT_POPULATION
 from tutor.views import maze_app, pickplace_app
-from tutor.views.start import run_file_name
 
 #: one run of each experiment, chosen so that the two rules give different η: the maze
 #: VF run reaches 90 % at demo 4 of 5, the pick-and-place NF run at demo 3 of 7

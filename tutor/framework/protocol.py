@@ -49,7 +49,7 @@ from ..paper import (
 )
 from .feedback import FEEDBACK_POLICIES, FeedbackPolicy
 
-__all__ = ["Condition", "Experiment", "EXPERIMENTS", "experiment", "register"]
+__all__ = ["Condition", "Experiment", "EXPERIMENTS", "experiment", "register", "run_file_name"]
 
 
 @dataclass(frozen=True)
@@ -126,6 +126,9 @@ class Experiment:
         after the last demo over the demos given (Experiment 2).
     beyond_note : str
         What the conditions beyond the paper are, in a trainee's words.
+    file_stem : str
+        A run file's name in the trainee's folder, without ``.json``: a template with
+        ``{condition}`` and ``{run}`` (:func:`run_file_name`).
     """
 
     number: int
@@ -137,6 +140,7 @@ class Experiment:
     within_subjects: bool
     score_rule: str
     beyond_note: str = ""
+    file_stem: str = "{condition}"
     _by_code: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -176,6 +180,13 @@ class Experiment:
             f"{', '.join(self.paper_codes)}"
             + (f" (or {', '.join(self.extra_codes)}, beyond the paper)" if self.extra_codes else "")
         )
+
+
+def run_file_name(experiment: int, condition: str, run: int = 1, practice: bool = False) -> str:
+    """The file name of a run in the trainee's folder, e.g. ``VF.json`` (Experiment 1)
+    or ``pickplace_SF_run3.json``; practice runs get the prefix ``practice_``."""
+    stem = EXPERIMENTS[experiment].file_stem.format(condition=condition, run=run)
+    return f"{'practice_' if practice else ''}{stem}.json"
 
 
 def _policy(name: str) -> FeedbackPolicy:
@@ -294,6 +305,7 @@ register(
         runs=PICKPLACE_N_RUNS,
         within_subjects=False,
         score_rule="final",
+        file_stem="pickplace_{condition}_run{run}",
         beyond_note=(
             "AF and HF are beyond the paper. AF, adaptive feedback: after each demonstration "
             "the robot tries the five plants it finds least certain (where what it learnt "

@@ -44,8 +44,8 @@ import ipywidgets as w
 from ..errors import InvalidParameterError, TutorError
 from ..fileio import check_path_length
 from ..framework.wording import percent, plural
+from ..payloads import check_choice, check_text, safely
 from ..runtime import headless, sessions_root
-from ..views.payloads import check_choice, check_text, safely
 from .class_report import BESIDE_LEGEND, analyse_class, as_sentence, class_figure, save_class
 from .classroom import read_class
 from .report import OUT_ROOM

@@ -27,8 +27,8 @@ from pathlib import Path
 
 from ..errors import InvalidParameterError, SaveError
 from ..fileio import write_json
+from ..framework.protocol import run_file_name
 from ..framework.record import Trainee
-from ..views.start import run_file_name
 from ..workers import one_blas_thread, process_pool
 from .cohort import StudySettings, check_request, teach_runs
 

@@ -24,12 +24,12 @@ import numpy as np
 from ..errors import InvalidPayloadError, TutorError
 from ..framework.wording import percent
 from ..paper import PAPER_MEDIAN_ETA
+from ..payloads import check_stroke
 from ..runtime import headless
 from ..tasks.maze import MazeTask
 from ..tasks.maze_run import MazeRun
 from ..tasks.optimal_reference import optimal_reference
 from .app import TutorApp, guarded
-from .payloads import check_stroke
 from .sketchpad import Sketchpad, layout_spec
 from .text import compose, finish_summary, optimal_sentence
 

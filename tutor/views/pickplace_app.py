@@ -40,6 +40,7 @@ import numpy as np
 from ..errors import InvalidFileError, InvalidParameterError, TutorError
 from ..framework.wording import percent, plural
 from ..paper import PAPER_MEAN_ETA, PAPER_THIRD_RUN_ETA
+from ..payloads import check_choice
 from ..robot.follow import HandFollower
 from ..runtime import headless
 from ..tasks.pickplace import PickPlaceTask
@@ -47,7 +48,6 @@ from ..tasks.pickplace_protocol import PickPlaceRun
 from ..tasks.recording import steady_hand
 from .app import TutorApp, guarded
 from .hand import HANDS, choose_hand, controls_html
-from .payloads import check_choice
 from .style import DEMO, FAIL, PASS, UNKNOWN
 from .text import (
     HINT_GLYPH,

@@ -82,8 +82,8 @@ import numpy as np
 
 from ..errors import InvalidParameterError, InvalidPayloadError
 from ..fileio import atomic_write_text
+from ..payloads import check_view_message, safely
 from .meshcat_recorder import SceneRecorder, empty_animation, frame_commands
-from .payloads import check_view_message, safely
 from .scene_animation import (
     Track,
     key_samples,
@@ -638,7 +638,7 @@ class Scene3D:
         ------
         InvalidPayloadError
             A message the tutor does not know, or a guide message that is not one
-            (:mod:`tutor.views.payloads`); nothing changes and guiding goes on.
+            (:mod:`tutor.payloads`); nothing changes and guiding goes on.
         """
         kind = content.get("type") if isinstance(content, dict) else None
         if kind in GUIDE_MESSAGES:

@@ -24,9 +24,9 @@ kernel -> page
     ``{"type": "guide", "cmd": "stop"}``: guiding is over.
 page -> kernel
     ``{"type": "guide-move", "seq", "x", "y", "z", "g"}``
-    (:func:`~tutor.views.payloads.check_guide_move`); ``{"type": "guide-end", "n",
+    (:func:`~tutor.payloads.check_guide_move`); ``{"type": "guide-end", "n",
     "setup"}`` with one buffer of n * 5 float64
-    (:func:`~tutor.views.payloads.check_guide_end`); ``{"type": "guide-cancel"}``.
+    (:func:`~tutor.payloads.check_guide_end`); ``{"type": "guide-cancel"}``.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidParameterError
-from .payloads import check_guide_end, check_guide_move
+from ..payloads import check_guide_end, check_guide_move
 
 __all__ = ["GuideEnd", "Guide", "GUIDE_MESSAGES"]
 
@@ -140,7 +140,7 @@ class Guide:
         Raises
         ------
         InvalidPayloadError
-            A move that is not one (:func:`~tutor.views.payloads.check_guide_move`); the
+            A move that is not one (:func:`~tutor.payloads.check_guide_move`); the
             arm stays where it was.
         """
         seq, target, grip = check_guide_move(content)
@@ -164,7 +164,7 @@ class Guide:
         Raises
         ------
         InvalidPayloadError
-            See :func:`~tutor.views.payloads.check_guide_end`.
+            See :func:`~tutor.payloads.check_guide_end`.
         """
         raw, setup = check_guide_end(content, buffers)
         return GuideEnd(raw, setup)

@@ -118,7 +118,7 @@ class Sketchpad(anywidget.AnyWidget):
     note = traitlets.Unicode("").tag(sync=True)
     enabled = traitlets.Bool(True).tag(sync=True)
     #: whatever the page sent as the last stroke, checked by its observer
-    #: (:func:`tutor.views.payloads.check_stroke`), not by the trait, so that a bad one
+    #: (:func:`tutor.payloads.check_stroke`), not by the trait, so that a bad one
     #: is said in the panel instead of raising inside the widget's message handler
     stroke = traitlets.Any([]).tag(sync=True)
     stroke_count = traitlets.Int(0).tag(sync=True)

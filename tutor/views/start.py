@@ -51,6 +51,8 @@ from pathlib import Path
 import ipywidgets as w
 
 from ..errors import InvalidParameterError, TutorError
+from ..framework.protocol import run_file_name
+from ..payloads import check_text, safely
 from ..runtime import (
     default_trainee,
     env_text,
@@ -60,14 +62,12 @@ from ..runtime import (
     trainee_key,
 )
 from ..tasks.maze_run import PHASE_ORDER
-from .payloads import check_text, safely
 from .worked_example import instruction_widget
 
 __all__ = [
     "StartForm",
     "MazeExperiment",
     "maze_experiment",
-    "run_file_name",
     "MAZE_AUTOPLAY",
     "HEADLESS_TRAINEE",
 ]
@@ -82,12 +82,6 @@ TYPE_A_NAME = (
 )
 #: headless runs: the bundled demonstration set fed to each maze phase
 MAZE_AUTOPLAY = {"NF": "maze_undemonstrated", "VF": "maze_good", "VR": "maze_good"}
-
-def run_file_name(experiment: int, condition: str, run: int = 1, practice: bool = False) -> str:
-    """The file name of a run in the trainee's folder, e.g. ``VF.json``."""
-    stem = condition if experiment == 1 else f"pickplace_{condition}_run{run}"
-    return f"{'practice_' if practice else ''}{stem}.json"
-
 
 class StartForm:
     """Name, condition, practice and Start; then the experiment's runs one after another.

@@ -49,12 +49,13 @@ import ipywidgets as w
 from ..errors import InvalidParameterError, InvalidPlanError, TutorError
 from ..fileio import read_json
 from ..framework.assignment import plan_from_env
+from ..framework.protocol import run_file_name
 from ..framework.record import RunRecord
+from ..payloads import check_choice
 from ..runtime import env_text, headless, sessions_root, trainee_key
 from ..tasks.pickplace_protocol import RUNS, PickPlaceRun
 from .hand import HAND_SOURCES, HANDS, hand_and_source
-from .payloads import check_choice
-from .start import HEADLESS_TRAINEE, StartForm, run_file_name
+from .start import HEADLESS_TRAINEE, StartForm
 from .worked_example import instruction_widget
 
 __all__ = [

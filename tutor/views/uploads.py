@@ -23,7 +23,7 @@ from traitlets import Bunch, Dict
 
 from ..errors import InvalidPayloadError, SaveError, TutorError
 from ..fileio import MAX_NAME_BYTES, finite_number, save_error
-from .payloads import check_upload, shown_upload_name
+from ..payloads import check_upload, shown_upload_name
 
 __all__ = ["Upload", "on_upload", "safe_upload_name", "shown_upload_name"]
 
@@ -43,7 +43,7 @@ _FILE_KEYS = ("name", "type", "size", "content")
 
 def _files_from_page(js, _widget) -> list:
     """The page's files as ``FileUpload`` reads them, without raising on a malformed one:
-    what is missing stays missing, for :func:`~tutor.views.payloads.check_upload` to refuse
+    what is missing stays missing, for :func:`~tutor.payloads.check_upload` to refuse
     in words (ipywidgets' own reader raises KeyError inside the widget's message handler)."""
     files = []
     for entry in js if isinstance(js, list) else [js]:
@@ -149,7 +149,7 @@ def on_upload(
     -----
     The upload is written to a temporary folder of its own and removed after
     ``load`` returns. What arrives is checked first
-    (:func:`~tutor.views.payloads.check_upload`): a file without its content, or larger
+    (:func:`~tutor.payloads.check_upload`): a file without its content, or larger
     than :data:`~tutor.limits.MAX_UPLOAD_BYTES`, is refused unwritten. A
     :class:`~tutor.errors.TutorError` raised by ``load`` (or a failure to store the
     upload) is reported, never raised out of the callback.

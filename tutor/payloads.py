@@ -27,10 +27,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import InvalidDemoError, InvalidPayloadError, TutorError
-from ..fileio import megabytes
-from ..limits import MAX_STROKE_POINTS, MAX_TEXT_CHARS, MAX_UPLOAD_BYTES
-from ..tpgmm.checks import check_demo
+from .errors import InvalidDemoError, InvalidPayloadError, TutorError
+from .fileio import megabytes
+from .limits import MAX_STROKE_POINTS, MAX_TEXT_CHARS, MAX_UPLOAD_BYTES
+from .tpgmm.checks import check_demo
 
 __all__ = [
     "check_stroke",
