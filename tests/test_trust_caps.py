@@ -47,7 +47,7 @@ def test_every_cap_is_defined_in_tutor_limits_only():
                     owners.setdefault(target.id, []).append(path.relative_to(ROOT).as_posix())
     assert owners == {name: ["tutor/limits.py"] for name in names}
     from tutor.study import limits as study_limits
-    from tutor.views import payloads
+    from tutor import payloads
 
     assert fileio.MAX_FILE_BYTES is limits.MAX_FILE_BYTES
     assert payloads.MAX_UPLOAD_BYTES is limits.MAX_UPLOAD_BYTES  # the upload's check
