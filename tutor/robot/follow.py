@@ -6,7 +6,9 @@ Each :meth:`HandFollower.step` takes the handle's position and the hand command 
    (:data:`REACH_CENTER`, :data:`REACH_RADIUS`): never lower than the table top plus
    :data:`FLOOR_CLEARANCE`, so the gripper cannot pass through the table;
 2. runs a few iterations of the arm's damped-least-squares IK (:meth:`Arm.ik`'s solver),
-   warm-started from the previous configuration, with the gripper pointing down;
+   warm-started from the previous configuration, with the gripper pointing down; a jump
+   longer than :data:`STEP_LEG` is taken in legs along the straight line, and a solution
+   that would still put the tool under the table top is refused (the arm stays put);
 3. sets the fingers from g (:meth:`Arm.fingers`) and checks collisions
    (:meth:`Arm.colliding_pair`): a configuration in contact is kept (the view paints
    the link red and the recording goes on), and the link is reported;
@@ -53,6 +55,8 @@ REACH_RADIUS = 0.74
 FLOOR_CLEARANCE = 0.012
 #: The guide box reaches this far beyond the tray, the bin and the start pose (m).
 GUIDE_MARGIN = 0.15
+#: Longest straight leg one IK solve is asked to cover (m); longer jumps are split.
+STEP_LEG = 0.05
 #: Highest handle position above the start pose or the release point, whichever is higher.
 GUIDE_HEADROOM = 0.2
 
@@ -276,10 +280,27 @@ class HandFollower:
         arm = self.arm
         q = self.state.q.copy()
         q[arm.n_arm :] = arm.fingers(g)
-        q, ep, er, _ = arm._solve(q, target, self._R, self.iterations, 1e-4, 1e-3, 1e-2, 0.1)
+        # A long jump is taken in legs of at most STEP_LEG along the straight line from
+        # where the tool is: one long solve can swing the hand under the table top.
+        here = self.state.position
+        legs = max(1, int(np.ceil(np.linalg.norm(target - here) / STEP_LEG)))
+        for leg in range(1, legs + 1):
+            goal = here + (target - here) * (leg / legs)
+            q, ep, er, _ = arm._solve(q, goal, self._R, self.iterations, 1e-4, 1e-3, 1e-2, 0.1)
+        tool_z = self._tool_z(q)
+        if tool_z < self._lo[2] - FLOOR_CLEARANCE:  # still under the table top: stay put
+            q = self.state.q.copy()
+            q[arm.n_arm :] = arm.fingers(g)
+            ep = np.inf
         reached = bool(ep <= REACH_TOL and er <= TILT_TOL)
         self.state = self._state(q, target, g, clamped, reached)
         return self.state
+
+    def _tool_z(self, q) -> float:
+        """Height of the tool centre point at ``q`` (m)."""
+        arm, pin = self.arm, self._pin
+        pin.forwardKinematics(arm.model, arm.data, q)
+        return float(pin.updateFramePlacement(arm.model, arm.data, arm.frame_id).translation[2])
 
     def _state(self, q, target, grip, clamped, reached=True) -> FollowState:
         """The state at ``q`` (``target`` None: where the tool is)."""
