@@ -137,9 +137,16 @@ def test_finish_gives_one_score_by_the_papers_rule(maze):
         assert "was not reached" in text
 
 
-def test_plain_reasons_drop_sample_numbers():
-    assert plain_reason("hit obstacle 2 at sample 57 of 200") == "hit obstacle 2"
-    assert plain_reason("ended 3.9 mm from the target") == "ended 3.9 mm from the target"
+def test_plain_reasons_are_words_from_data_without_sample_numbers():
+    from tutor.framework.task import Reason
+    from tutor.tasks.maze import MazeTask
+
+    task = MazeTask()
+    hit = (Reason("obstacle", 56, 200, obstacle="obstacle 2"), Reason("end", distance=0.039))
+    assert plain_reason(task, hit) == "hit obstacle 2 and ended 3.9 cm from the target"
+    words = "hit obstacle 2 at sample 57 of 200 and ended 3.9 cm from the target"
+    assert task.reason_words(hit) == words
+    assert plain_reason(task, ()) == ""
 
 
 # ---------------------------------------------------------------- one score everywhere

@@ -46,8 +46,8 @@ def test_every_cap_is_defined_in_tutor_limits_only():
                 if isinstance(target, ast.Name) and target.id in names:
                     owners.setdefault(target.id, []).append(path.relative_to(ROOT).as_posix())
     assert owners == {name: ["tutor/limits.py"] for name in names}
-    from tutor.study import limits as study_limits
     from tutor import payloads
+    from tutor.study import limits as study_limits
 
     assert fileio.MAX_FILE_BYTES is limits.MAX_FILE_BYTES
     assert payloads.MAX_UPLOAD_BYTES is limits.MAX_UPLOAD_BYTES  # the upload's check

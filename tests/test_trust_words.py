@@ -80,7 +80,7 @@ def test_the_incorrect_cell_says_the_direction_of_its_own_number(task):
     sign = int(np.sign(change_points(record.delta)))
     first = summary(record).splitlines()[0]
     assert _direction(first) == sign, first
-    mark = incorrect_mark(record)
+    mark = incorrect_mark(record, task)
     assert _direction(mark) == sign, mark
     assert ("does not show" in mark) == (sign > 0), mark
     assert "obstacle 1" in mark  # the tutor's own check, with the rule it breaks
@@ -102,7 +102,7 @@ def test_notebook_01_prose_claims_no_direction_and_its_cells_say_it():
     claims = [m.group(0) for m in DIRECTION.finditer(prose)]
     assert not claims, claims  # the direction is said by the cells, from the number
     code = "\n".join(_cells(NB01, "code"))
-    assert "incorrect_mark(wrong.latest)" in code and "summary(wrong.latest)" in code
+    assert "incorrect_mark(wrong.latest, task)" in code and "summary(wrong.latest)" in code
 
 
 def test_notebook_01_asks_for_nothing_it_cannot_do(task):

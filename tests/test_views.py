@@ -261,21 +261,24 @@ def _paths_that_fail(layout):
 
 
 def test_classify_reads_the_maze_tasks_own_reasons(task):
+    from tutor.framework.task import Reason
     from tutor.views.maze_reasons import classify, failures
 
     paths = _paths_that_fail(task.layout)
     verdict = task.judge(paths)
     assert verdict.passed.tolist() == [True, False, False, False, False]
-    kinds = [classify(r).kind for r in verdict.reasons]
+    kinds = [classify(r).kind for r in verdict.causes]
     assert kinds == ["pass", "obstacle", "outside", "miss", "miss"]
-    assert classify(verdict.reasons[1]).obstacle == "obstacle 2"
-    found = failures(paths, verdict.reasons, task.layout)
+    assert classify(verdict.causes[1]).obstacle == "obstacle 2"
+    found = failures(paths, verdict.causes, task.layout)
     np.testing.assert_allclose(found[1].point, [0.15, 0.195])  # where it went in
     np.testing.assert_allclose(found[2].point, [0.25, 0.10])
     assert found[3].miss == pytest.approx(0.003, abs=1e-6)  # from the target's edge
     assert found[0].point is None and found[0].miss == 0.0
-    assert classify("did not start in the start zone").kind == "start"
-    assert classify("something new").kind == "other"
+    assert classify((Reason("start"),)).kind == "start"
+    assert classify((Reason("start"), Reason("end", distance=0.02))).kind == "start"
+    assert classify((Reason("end", distance=0.02), Reason("obstacle", 5, 200))).kind == "obstacle"
+    assert classify((Reason("no_grab"),)).kind == "other"
 
 
 def test_reason_summary_counts_each_cause(task):
@@ -283,7 +286,7 @@ def test_reason_summary_counts_each_cause(task):
 
     paths = _paths_that_fail(task.layout)
     paths = np.concatenate([paths, paths[3:4] + [0.0, -0.001]])  # a second near miss, 4 mm
-    found = failures(paths, task.judge(paths).reasons, task.layout)
+    found = failures(paths, task.judge(paths).causes, task.layout)
     text = reason_summary(found)
     assert text.startswith("2 miss the target by 3–4 mm; ")
     assert "1 hits obstacle 2" in text and "1 leaves the maze" in text
@@ -351,7 +354,7 @@ def test_sketchpad_sends_paths_as_bytes_and_counts_reasons(vf, task):
 
     pad = Sketchpad(maze=layout_spec(task.layout))
     rec = vf.latest
-    pad.show(vf.demos, vf.realisations, rec.passed, rec.shown, reasons=rec.reasons)
+    pad.show(vf.demos, vf.realisations, rec.passed, rec.shown, causes=rec.causes)
     n = len(task.conditions)
     assert isinstance(pad.real_xy, bytes) and len(pad.real_xy) == n * BROWSER_SAMPLES * 2 * 4
     assert len(pad.realisations) == n and len(pad.demos) == 3
@@ -361,7 +364,7 @@ def test_sketchpad_sends_paths_as_bytes_and_counts_reasons(vf, task):
     assert len(pad.marks) == n_fail and {m[2] for m in pad.marks} <= {1, 2, 3, 4}
     assert pad.summary and "target" in pad.summary
     # only what is shown: nothing shown, nothing counted
-    pad.show(vf.demos, vf.realisations, rec.passed, [], reasons=rec.reasons)
+    pad.show(vf.demos, vf.realisations, rec.passed, [], causes=rec.causes)
     assert pad.marks == [] and pad.summary == ""
     with pytest.raises(InvalidParameterError, match="one per realisation"):
-        pad.show(vf.demos, vf.realisations, rec.passed, rec.shown, reasons=rec.reasons[:3])
+        pad.show(vf.demos, vf.realisations, rec.passed, rec.shown, causes=rec.causes[:3])

@@ -47,7 +47,7 @@ from .failures import (
 from .feedback import FEEDBACK_POLICIES
 from .metrics import SessionScore, efficacy, efficiency, run_score
 from .selectors import DEFAULT_K, DEFAULT_SELECTOR, SelectionContext, check_k, check_selector
-from .task import Task
+from .task import Reason, Task
 
 __all__ = ["FeedbackRecord", "TeachingSession", "FEEDBACK_MODES"]
 
@@ -75,6 +75,10 @@ class FeedbackRecord:
     undemonstrated: np.ndarray  #: bool (n,): B^ \ (R^ or b)
     shown: np.ndarray  #: int (k,): indices of the conditions in r
     warnings: tuple[TeachingWarning, ...] = field(default=())
+    #: the same reasons as data: a tuple of :class:`~tutor.framework.task.Reason` per
+    #: realisation (empty if it passes)
+    causes: tuple[tuple[Reason, ...], ...] = field(default=())
+    demo_causes: tuple[Reason, ...] = field(default=())  #: the demo's own, as data
 
     @property
     def kinds(self) -> set[str]:
@@ -384,6 +388,8 @@ class TeachingSession:
             reasons=verdict.reasons,
             demo_passed=bool(own.passed[0]),
             demo_reason=own.reasons[0],
+            causes=verdict.causes,
+            demo_causes=own.causes[0],
             similarity=sim,
             nearest_demo=None if nearest < 0 else nearest + 1,
             demonstrated=demonstrated,

@@ -18,8 +18,44 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..tpgmm import TPGMM, Frame, FrameBatch
+from .wording import REASON_WORDS, listing
 
-__all__ = ["Task", "Verdict"]
+__all__ = ["Task", "Verdict", "Reason"]
+
+
+@dataclass(frozen=True)
+class Reason:
+    """One way a trajectory fails the task's criteria, as data.
+
+    A task's :meth:`Task.judge` gives each failing trajectory a tuple of these, in the
+    order they happen along the path; the pictures and the panel read the data, and the
+    words come from :meth:`Task.reason_words` (templates in
+    :data:`tutor.framework.wording.REASON_WORDS`). Nothing reads words back.
+
+    Attributes
+    ----------
+    kind : str
+        A key of :data:`~tutor.framework.wording.REASON_WORDS` ("obstacle", "end", ...).
+    sample : int or None
+        0-based index of the first sample that breaks criterion (i), for the kinds that
+        happen at a sample.
+    samples : int or None
+        How many samples the judged path has (with ``sample``).
+    distance : float or None
+        How far off (task units): the end from the target, the grasp from the plant.
+    obstacle : str
+        The name of the obstacle hit ("obstacle 2 (right-hand)"), else "".
+    plant, chosen : int or None
+        Test-condition indices: the one grabbed and the one meant ("wrong_plant").
+    """
+
+    kind: str
+    sample: int | None = None
+    samples: int | None = None
+    distance: float | None = None
+    obstacle: str = ""
+    plant: int | None = None
+    chosen: int | None = None
 
 
 @dataclass(frozen=True)
@@ -30,12 +66,14 @@ class Verdict:
     ----------
     passed : ndarray of bool, shape (B,)
         True where the trajectory is in B (meets every criterion).
+    causes : tuple of tuple of Reason, length B
+        Empty for a passing trajectory, otherwise why it fails, as data.
     reasons : tuple of str, length B
-        Empty for a passing trajectory, otherwise the first criterion it fails in
-        plain words ("hit obstacle 2 at sample 57").
+        The same in plain words ("hit obstacle 2 at sample 57 of 200"), "" for a pass.
     """
 
     passed: np.ndarray
+    causes: tuple[tuple[Reason, ...], ...]
     reasons: tuple[str, ...]
 
 
@@ -58,6 +96,37 @@ class Task(ABC):
     def format_distance(self, distance: float) -> str:
         """A distance in the task's units, in words for a trainee."""
         return f"{distance:.3g}"
+
+    def condition_name(self, index: int) -> str:
+        """Test condition ``index`` (0-based) in words ("start point 3")."""
+        return f"{self.condition_noun} {int(index) + 1}"
+
+    def reason_words(self, causes, samples: bool = True) -> str:
+        """``causes`` (a tuple of :class:`Reason`) in plain words, "" for none; with
+        ``samples`` False, without "at sample k of n"."""
+        parts = []
+        for r in causes:
+            at = ""
+            if samples and r.sample is not None:
+                at = f" at sample {r.sample + 1} of {r.samples}"
+            parts.append(
+                REASON_WORDS[r.kind].format(
+                    at=at,
+                    distance="" if r.distance is None else self.format_distance(r.distance),
+                    obstacle=r.obstacle,
+                    plant="" if r.plant is None else self.condition_name(r.plant),
+                    chosen="" if r.chosen is None else self.condition_name(r.chosen),
+                )
+            )
+        return listing(parts)
+
+    def verdict(self, passed, causes) -> Verdict:
+        """A :class:`Verdict` of ``passed`` (B,) and ``causes`` (B tuples of
+        :class:`Reason`), with the words."""
+        causes = tuple(tuple(c) for c in causes)
+        return Verdict(
+            np.asarray(passed, dtype=bool), causes, tuple(self.reason_words(c) for c in causes)
+        )
 
     @property
     @abstractmethod

@@ -5,7 +5,16 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["plural", "sentence", "change_points", "efficacy_change", "percent", "NOT_A_NUMBER"]
+__all__ = [
+    "plural",
+    "sentence",
+    "change_points",
+    "efficacy_change",
+    "percent",
+    "listing",
+    "REASON_WORDS",
+    "NOT_A_NUMBER",
+]
 
 #: what a table or a sentence shows where there is no number (a dash, never "None")
 NOT_A_NUMBER = "–"
@@ -69,3 +78,36 @@ def sentence(text, capital: bool = False) -> str:
     if capital:
         text = text[:1].upper() + text[1:]
     return text if text.endswith((".", "!", "?")) else text + "."
+
+
+def listing(parts) -> str:
+    """Parts joined as a person lists them: "a", "a and b", "a, b and c".
+
+    >>> listing(["a"]), listing(["a", "b"]), listing(["a", "b", "c"])
+    ('a', 'a and b', 'a, b and c')
+    """
+    parts = list(parts)
+    if len(parts) < 2:
+        return "".join(parts)
+    return ", ".join(parts[:-1]) + " and " + parts[-1]
+
+
+#: How each kind of failure reason (:class:`tutor.framework.task.Reason`) is said. The
+#: slots: ``{at}`` (" at sample k of n", or nothing when sample numbers are left out),
+#: ``{distance}`` (in the task's units), ``{obstacle}``, ``{plant}`` and ``{chosen}``
+#: (the task's names of two test conditions).
+REASON_WORDS = {
+    "start": "did not start in the start zone",
+    "obstacle": "hit {obstacle}{at}",
+    "outside": "left the workspace{at}",
+    "end": "ended {distance} from the target",
+    "table": "went through the table{at}",
+    "tray": "hit the tray{at}",
+    "unreachable": "left the arm's reachable, collision-free workspace{at}",
+    "no_grab": "never closed the hand",
+    "grab": "grabbed {distance} from the plant",
+    "wrong_plant": "grabbed {plant} instead of the chosen {chosen}",
+    "no_release": "never opened the hand over the bin",
+    "release": "released {distance} from the bin",
+    "outside_bin": "released the plant outside the bin",
+}

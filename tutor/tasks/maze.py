@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import InvalidDemoError
 from ..fileio import read_json
-from ..framework.task import Task, Verdict
+from ..framework.task import Reason, Task, Verdict
 from ..resources import asset
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
 from .paths import minimum_jerk_through
@@ -290,24 +290,24 @@ class MazeTask(Task):
         ends_ok = end_dist <= lay.target_radius  # (iii)
         path_ok = ~bad_sample.any(axis=1)
         passed = path_ok & starts_ok & ends_ok
-        reasons = [""] * traj.shape[0]
+        causes = [()] * traj.shape[0]
         n_samples = traj.shape[1]
         for i in np.flatnonzero(~passed):
             parts = []
             if not starts_ok[i]:
-                parts.append("did not start in the start zone")
+                parts.append(Reason("start"))
             if not path_ok[i]:
                 k = int(np.argmax(bad_sample[i]))
                 hit = np.flatnonzero(in_obstacle[:, i, k])
-                where = f"at sample {k + 1} of {n_samples}"
                 if hit.size:
-                    parts.append(f"hit {lay.obstacles[hit[0]].name} {where}")
+                    name = lay.obstacles[hit[0]].name
+                    parts.append(Reason("obstacle", k, n_samples, obstacle=name))
                 else:
-                    parts.append(f"left the workspace {where}")
+                    parts.append(Reason("outside", k, n_samples))
             if not ends_ok[i]:
-                parts.append(f"ended {self.format_distance(end_dist[i])} from the target")
-            reasons[i] = ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1]
-        return Verdict(passed, tuple(reasons))
+                parts.append(Reason("end", distance=float(end_dist[i])))
+            causes[i] = tuple(parts)
+        return self.verdict(passed, causes)
 
     # ---------------------------------------------------------------- coverage
 

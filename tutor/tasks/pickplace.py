@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import InvalidDemoError, InvalidParameterError
 from ..fileio import read_json
-from ..framework.task import Task, Verdict
+from ..framework.task import Reason, Task, Verdict
 from ..resources import asset
 from ..robot.feasibility import first_failure
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
@@ -265,6 +265,9 @@ class PickPlaceTask(Task):
         r, c = divmod(int(index), self.scene.cols)
         return f"plant ({r + 1}, {c + 1})"
 
+    def condition_name(self, index: int) -> str:
+        return self.plant_name(index)
+
     # ---------------------------------------------------------------- demos
 
     def preprocess(self, raw) -> np.ndarray:
@@ -364,29 +367,23 @@ class PickPlaceTask(Task):
         grab_ok = (grab >= 0) & (grab_d <= ctx["delta_g"])
         rel_ok = (release >= 0) & (rel_d <= ctx["delta_r"])
         passed = path_ok & grab_ok & rel_ok
-        reasons = [""] * len(traj)
+        causes = [()] * len(traj)
         for i in np.flatnonzero(~passed):
             parts = []
             if not path_ok[i]:
                 k = int(first_bad[i])
-                what = (
-                    "went through the table"
-                    if below_table[i, k]
-                    else "hit the tray"
-                    if in_tray[i, k]
-                    else "left the arm's reachable, collision-free workspace"
-                )
-                parts.append(f"{what} at sample {k + 1} of {n}")
+                kind = "table" if below_table[i, k] else "tray" if in_tray[i, k] else "unreachable"
+                parts.append(Reason(kind, k, n))
             if grab[i] < 0:
-                parts.append("never closed the hand")
+                parts.append(Reason("no_grab"))
             elif not grab_ok[i]:
-                parts.append(f"grabbed {self.format_distance(grab_d[i])} from the plant")
+                parts.append(Reason("grab", distance=float(grab_d[i])))
             if grab[i] >= 0 and release[i] < 0:
-                parts.append("never opened the hand over the bin")
+                parts.append(Reason("no_release"))
             elif grab[i] >= 0 and not rel_ok[i]:
-                parts.append(f"released {self.format_distance(rel_d[i])} from the bin")
-            reasons[i] = ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1]
-        return Verdict(passed, tuple(reasons))
+                parts.append(Reason("release", distance=float(rel_d[i])))
+            causes[i] = tuple(parts)
+        return self.verdict(passed, causes)
 
     def judge_demo(self, demo, condition, context=None) -> Verdict:
         """A demo is correct when it grabs the chosen plant and releases over the bin."""
@@ -396,30 +393,24 @@ class PickPlaceTask(Task):
         chosen = self.nearest_condition(condition)
         parts = []
         if (traj[0, :, 2] < 0.0).any():
-            parts.append("went through the table")
+            parts.append(Reason("table"))
         if grab[0] < 0:
-            parts.append("never closed the hand")
+            parts.append(Reason("no_grab"))
         else:
             grabbed = self.nearest_condition(traj[0, grab[0], :3])
             off = np.linalg.norm(traj[0, grab[0], :3] - sc.plant_positions[grabbed])
             if grabbed != chosen:
-                parts.append(
-                    f"grabbed {self.plant_name(grabbed)} instead of the chosen "
-                    f"{self.plant_name(chosen)}"
-                )
+                parts.append(Reason("wrong_plant", plant=int(grabbed), chosen=int(chosen)))
             elif off > sc.pitch / 2:
-                parts.append(f"grabbed {self.format_distance(off)} from the plant")
+                parts.append(Reason("grab", distance=float(off)))
             if release[0] < 0:
-                parts.append("never opened the hand over the bin")
+                parts.append(Reason("no_release"))
             else:
                 p = traj[0, release[0], :3]
                 inside = np.all(np.abs(p[:2] - sc.bin_center[:2]) <= sc.bin_size[:2] / 2)
                 if not inside:
-                    parts.append("released the plant outside the bin")
-        if not parts:
-            return Verdict(np.array([True]), ("",))
-        text = ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1]
-        return Verdict(np.array([False]), (text,))
+                    parts.append(Reason("outside_bin"))
+        return self.verdict([not parts], [tuple(parts)])
 
     # ---------------------------------------------------------------- coverage
 

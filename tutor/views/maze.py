@@ -317,7 +317,7 @@ def plot_feedback(session, ax=None, step=-1, reveal=False):
     found = []
     if drawn.size:
         mean = realisations_at(session, i)
-        found = failures(mean, record.reasons, task.layout)
+        found = failures(mean, record.causes, task.layout)
         if highlight:
             rest = np.setdiff1d(np.arange(n), shown)
             _draw_realisations(ax, mean, passed, rest, linewidth=0.5, alpha=0.3, zorder=1)

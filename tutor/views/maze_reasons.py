@@ -1,11 +1,11 @@
 """Why each maze attempt fails, in a form a picture can draw and a sentence can count.
 
 The maze task's criteria (:meth:`tutor.tasks.maze.MazeTask.judge`) give every failing
-realisation a reason such as ``"hit obstacle 2 (right-hand) at sample 97 of 200 and
-ended 5.1 cm from the target"``. :func:`classify` turns one reason into its main cause
+realisation its causes as data (:class:`tutor.framework.task.Reason`: an obstacle hit at
+sample 97 of 200, an end 5.1 cm from the target). :func:`classify` picks the main cause
 (the first thing that went wrong along the path), :func:`failures` adds where on the
 path it happened, and :func:`reason_summary` counts the causes, e.g. "93 miss the
-target by 1–4 mm; 12 hit obstacle 2".
+target by 1–4 mm; 12 hit obstacle 2". No words are read back.
 
 A miss is measured from the target's edge (how far the attempt would have had to go
 on to reach the target), not from its centre.
@@ -13,7 +13,6 @@ on to reach the target), not from its centre.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,12 +24,6 @@ KINDS = ("pass", "obstacle", "outside", "start", "miss", "other")
 
 #: a miss up to this far from the target's edge is "near" (counted in millimetres)
 NEAR_MISS = 0.005
-
-_HIT = re.compile(r"hit (?P<name>.+?) at sample (?P<k>\d+) of \d+")
-_LEFT = re.compile(r"left the workspace at sample (?P<k>\d+) of \d+")
-_START = "did not start in the start zone"
-_ENDED = re.compile(r"ended [\d.]+ c?m from the target")
-
 
 @dataclass(frozen=True)
 class Failure:
@@ -59,37 +52,38 @@ class Failure:
     miss: float = 0.0
 
 
-def classify(reason: str) -> Failure:
-    """The main cause named by one reason string of the maze task ("" means it passes).
+def classify(causes) -> Failure:
+    """The main cause among one realisation's causes (a tuple of
+    :class:`~tutor.framework.task.Reason`; empty means it passes).
 
     A path that hits an obstacle or leaves the workspace is counted by that, even when
     it also ends away from the target: the end follows from the crash.
     """
-    if not reason:
+    if not causes:
         return Failure("pass")
-    hit = _HIT.search(reason)
-    if hit:
-        name = hit.group("name").split(" (")[0]
-        return Failure("obstacle", int(hit.group("k")) - 1, name)
-    left = _LEFT.search(reason)
-    if left:
-        return Failure("outside", int(left.group("k")) - 1)
-    if _START in reason:
+    by_kind = {r.kind: r for r in causes}
+    if "obstacle" in by_kind:
+        r = by_kind["obstacle"]
+        return Failure("obstacle", r.sample, r.obstacle.split(" (")[0])
+    if "outside" in by_kind:
+        return Failure("outside", by_kind["outside"].sample)
+    if "start" in by_kind:
         return Failure("start")
-    if _ENDED.search(reason):
+    if "end" in by_kind:
         return Failure("miss")
     return Failure("other")
 
 
-def failures(paths, reasons, layout) -> list[Failure]:
+def failures(paths, causes, layout) -> list[Failure]:
     """Each realisation's :class:`Failure`, with the point where it went wrong.
 
     Parameters
     ----------
     paths : ndarray (n, T, 2)
         The realisations R^ (metres), at the resolution they were judged.
-    reasons : sequence of str, length n
-        The task's reasons ("" for a realisation that passes).
+    causes : sequence of tuple of Reason, length n
+        The task's causes (``Verdict.causes``, ``FeedbackRecord.causes``; empty for a
+        realisation that passes).
     layout : MazeLayout
         For the target (the miss is measured from its edge).
     """
@@ -97,8 +91,8 @@ def failures(paths, reasons, layout) -> list[Failure]:
     out = []
     ends = paths[:, -1] if len(paths) else np.zeros((0, 2))
     miss = np.linalg.norm(ends - layout.target_center, axis=1) - layout.target_radius
-    for i, reason in enumerate(reasons):
-        f = classify(reason)
+    for i, found in enumerate(causes):
+        f = classify(found)
         if f.kind in ("obstacle", "outside"):
             point = paths[i, min(f.sample, paths.shape[1] - 1)]
         elif f.kind == "start":

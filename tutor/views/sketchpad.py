@@ -177,7 +177,7 @@ class Sketchpad(anywidget.AnyWidget):
         shown=(),
         rule_circle=None,
         note="",
-        reasons=None,
+        causes=None,
     ):
         """Update the picture in one message (traits that did not change are not sent).
 
@@ -190,20 +190,20 @@ class Sketchpad(anywidget.AnyWidget):
             Indices of the realisations to draw (r).
         rule_circle : dict with "center" (2,) and "radius", optional
         note : str
-        reasons : sequence of str (n,), optional
-            Why each realisation fails ("" if it passes), as the task's ``judge``
-            gives them (``FeedbackRecord.reasons``). With them, each shown failure is
+        causes : sequence of tuple of Reason (n,), optional
+            Why each realisation fails (empty where it passes), as the task's ``judge``
+            gives them (``FeedbackRecord.causes``). With them, each shown failure is
             marked where it went wrong and the causes are counted under the picture.
         """
         shown = [int(i) for i in shown]
         marks, summary = [], ""
-        if reasons is not None and realisations is not None and shown:
-            if len(reasons) != len(realisations):
+        if causes is not None and realisations is not None and shown:
+            if len(causes) != len(realisations):
                 raise InvalidParameterError(
-                    f"reasons has {len(reasons)} entries for {len(realisations)} "
-                    "realisations; give one per realisation ('' where it passes)"
+                    f"causes has {len(causes)} entries for {len(realisations)} "
+                    "realisations; give one per realisation (empty where it passes)"
                 )
-            found = failures(realisations, reasons, self._geometry)
+            found = failures(realisations, causes, self._geometry)
             for i in shown:
                 f = found[i]
                 if f.kind != "pass":

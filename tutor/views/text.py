@@ -20,8 +20,6 @@ rule (:func:`tutor.framework.metrics.run_score`), beside the paper's figure.
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from ..framework import AMBIGUOUS, INCORRECT, UNDEMONSTRATED
@@ -47,10 +45,10 @@ HINT_GLYPH = "★"
 TARGET = 0.9
 
 
-def plain_reason(reason: str) -> str:
-    """A failure reason without sample numbers ("hit obstacle 2 at sample 57" -> "hit
-    obstacle 2")."""
-    return re.sub(r"\s*\(?\bat sample \d+(?: of \d+)?\)?", "", reason).strip()
+def plain_reason(task, causes) -> str:
+    """Why a path fails (its causes, a tuple of :class:`~tutor.framework.task.Reason`),
+    in plain words without sample numbers: "hit obstacle 2 (right-hand)"."""
+    return task.reason_words(causes, samples=False)
 
 
 def hint_sentence(task, plant: int) -> str:
@@ -87,14 +85,15 @@ def _did(task, record, vis, n_demos: int) -> str:
     bad = [i for i in shown if not record.passed[i]]
     if len(shown) == 1:
         i = shown[0]
-        verdict = "succeeds" if record.passed[i] else f"fails: {plain_reason(record.reasons[i])}"
+        why = "" if record.passed[i] else plain_reason(task, record.causes[i])
+        verdict = "succeeds" if record.passed[i] else f"fails: {why}"
         return f"The robot tried {_name(task, i)}: it {verdict}."
     text = (
         f"The robot tried {len(shown)} {task.condition_noun_plural}: {len(ok)} "
         f"succeed{'s' if len(ok) == 1 else ''}"
     )
     if bad:
-        fails = "; ".join(f"{_name(task, i)} {plain_reason(record.reasons[i])}" for i in bad)
+        fails = "; ".join(f"{_name(task, i)} {plain_reason(task, record.causes[i])}" for i in bad)
         text += f", {len(bad)} fail{'s' if len(bad) == 1 else ''} ({fails})"
     return text + "."
 
@@ -105,7 +104,7 @@ def _means(task, record, vis, *, generated: bool, mistake: str, wrong_earlier) -
     lines = []
     for w in record.warnings:
         if w.kind == INCORRECT and not record.demo_passed:
-            why = plain_reason(record.demo_reason)
+            why = plain_reason(task, record.demo_causes)
             if mistake:
                 fact = f"Demo {m} does not do the task (it {why}): the mistake you chose to show."
                 advice = "See what it does to the robot, then undo it."
@@ -340,7 +339,7 @@ def _how_to_take_back(demos: list[int], starts: str) -> str:
     )
 
 
-def incorrect_mark(record) -> str:
+def incorrect_mark(record, task) -> str:
     """Whether the paper's mark of an incorrect demo (its efficacy change is at most 0)
     shows on this step, read off the change of efficacy the step shows, and the tutor's
     own check of the demo against the task's rules beside it (for the framework's
@@ -360,7 +359,7 @@ def incorrect_mark(record) -> str:
     still = "still " if change_points(record.delta) > 0 else "also "
     return (
         f"{head} The tutor {still}flags demo {m}, because it breaks the task's rules: it "
-        f"{plain_reason(record.demo_reason)}."
+        f"{plain_reason(task, record.demo_causes)}."
     )
 
 
