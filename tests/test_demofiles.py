@@ -364,7 +364,8 @@ def test_save_and_load_round_trip_any_finite_table(tmp_path_factory, table, suff
 
 
 class Tutor:
-    """The smallest real consumer of uploads: loads demos, shows a message line."""
+    """The smallest real consumer of uploads: loads demos, naming the file as the trainee
+    knows it (as the run controller does), and shows a message line (``tell``)."""
 
     def __init__(self, fail_with=None):
         self.message = ""
@@ -376,16 +377,20 @@ class Tutor:
     def refresh(self):
         self.refreshed += 1
 
-    def load(self, path):
+    def tell(self, text):
+        self.message = text
+        self.refresh()
+
+    def load(self, path, name):
         self.paths.append(path)
         assert path.exists()
         if self.fail_with is not None:
             raise self.fail_with
         try:
             self.loaded.append(load_demos(path))
-            self.message = f"Added {len(self.loaded[-1])} demonstration(s) from {path.name}."
+            self.message = f"Added {len(self.loaded[-1])} demonstration(s) from {name}."
         except InvalidFileError as exc:
-            self.message = f"Nothing was loaded: {exc}"
+            self.message = f"Nothing was loaded: {str(exc).replace(path.name, name)}"
 
 
 def upload(name, data: bytes):
@@ -434,7 +439,7 @@ def test_a_name_over_255_bytes_keeps_its_extension_and_fits():
 )
 def test_hostile_upload_names_load_under_a_safe_name(name):
     tutor = Tutor()
-    on_upload(tutor.load)(upload(name, CSV))
+    on_upload(tutor.load, tutor.tell)(upload(name, CSV))
     (path,) = tutor.paths
     assert path.suffix == ".csv" and "\x00" not in str(path)
     assert len(path.name.encode()) <= 255 and path.parent.name.startswith("lfd-upload-")
@@ -444,10 +449,10 @@ def test_hostile_upload_names_load_under_a_safe_name(name):
 
 def test_errors_from_load_are_shown_not_raised_naming_the_trainees_file():
     tutor = Tutor()
-    on_upload(tutor.load)(upload("bad\x00name.csv", b"demo;t;x;y\n1;0;0,5;1\n"))
+    on_upload(tutor.load, tutor.tell)(upload("bad\x00name.csv", b"demo;t;x;y\n1;0;0,5;1\n"))
     assert tutor.message.startswith("Nothing was loaded: bad?name.csv (values separated by ';')")
     failing = Tutor(fail_with=SaveError("could not save s.json: the disk is full"))
-    on_upload(failing.load)(upload("ok.csv", CSV))
+    on_upload(failing.load, failing.tell)(upload("ok.csv", CSV))
     assert failing.message == "could not save s.json: the disk is full" and failing.refreshed
     broken = Tutor(fail_with=InvalidDemoError("demo 1 is too short"))
     shown = []
@@ -457,7 +462,7 @@ def test_errors_from_load_are_shown_not_raised_naming_the_trainees_file():
 
 def test_an_oversized_or_empty_upload_is_refused_unwritten(monkeypatch):
     tutor = Tutor()
-    observer = on_upload(tutor.load)
+    observer = on_upload(tutor.load, tutor.tell)
     observer({"new": ()})
     for item in ({"name": "x.csv"}, {"name": "x.csv", "content": 10**12}, None, "x"):
         tutor.message = ""

@@ -373,7 +373,7 @@ class Ctx:
             proc.wait(30)
         for app in self.apps:
             try:
-                app._release_lock()
+                app.controller.release_lock()
             except Exception:  # noqa: BLE001 - cleaning up only
                 pass
 

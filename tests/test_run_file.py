@@ -15,10 +15,10 @@ from tests.helpers import REPO
 from tutor.demofiles import bundled_demos, save_demos
 from tutor.errors import InvalidParameterError
 from tutor.framework import RunRecord, Trainee
+from tutor.framework import controller as controller_module
 from tutor.runtime import session_dir, trainee_key
 from tutor.tasks.maze_run import MazeRun
 from tutor.tasks.pickplace_protocol import PickPlaceRun
-from tutor.views import app as app_module
 from tutor.views.maze_app import MazeTutor
 from tutor.views.pickplace_app import PickPlaceTutor
 
@@ -172,7 +172,7 @@ def test_reset_asks_for_a_second_click_and_keeps_the_attempt(tmp_path, good, mon
         app.add(d)
     app.finish()
     now = [1000.0]
-    monkeypatch.setattr(app_module.time, "monotonic", lambda: now[0])
+    monkeypatch.setattr(controller_module.time, "monotonic", lambda: now[0])
     app.buttons["Reset"].click()
     assert app.session.n_demos == 3 and "again within 5 seconds" in app.message
     now[0] += 6.0  # too late: the first click has expired

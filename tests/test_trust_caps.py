@@ -141,7 +141,7 @@ def test_an_upload_over_its_cap_is_refused_unwritten(tmp_path):
 
     app = MazeTutor("VF", session_file=tmp_path / "vf.json")
     before = sorted(Path(os.environ.get("TMPDIR", "/tmp")).glob("lfd-upload-*"))
-    on_upload(app.load)(_upload("big.csv", b"x" * (limits.MAX_UPLOAD_BYTES + 1)))
+    on_upload(app.load, app.tell)(_upload("big.csv", b"x" * (limits.MAX_UPLOAD_BYTES + 1)))
     assert "larger than the 10 MB an upload can be" in app.message
     assert app.session.n_demos == 0
     assert sorted(Path(os.environ.get("TMPDIR", "/tmp")).glob("lfd-upload-*")) == before

@@ -11,7 +11,8 @@ VR  visual feedback and the paper's three rules: the tutor marks the 4 cm circle
 Every completed demonstration is saved at once (atomically) to the run's file, so a
 crashed or restarted kernel resumes where the trainee was; resuming, the file lock,
 loading, undo, reset and finish are shared with the pick-and-place tutor
-(:mod:`tutor.views.app`).
+(:class:`tutor.framework.controller.RunController`, below the views; the shared widgets
+are :mod:`tutor.views.app`'s).
 """
 
 from __future__ import annotations
@@ -55,6 +56,7 @@ class MazeTutor(TutorApp):
     """
 
     demo_columns = ("t", "x", "y")
+    undo_note = ""  # the redrawn sketchpad shows what was taken back
 
     def __init__(
         self,
@@ -112,7 +114,7 @@ class MazeTutor(TutorApp):
         try:
             raw = check_stroke(self.pad.stroke)
         except InvalidPayloadError as exc:
-            self.message = f"That stroke was not used: {exc}"
+            self.controller.say(f"That stroke was not used: {exc}")
             return
         self._add(raw)
 
@@ -122,10 +124,10 @@ class MazeTutor(TutorApp):
         self._add(raw)
 
     def _add(self, raw) -> None:
-        if self._refuse_if_read_only():
+        if self.controller.refuse_if_read_only():
             return
         if self.finished:
-            self.message = (
+            self.controller.say(
                 "This run is finished, so that stroke was not used. Press Reset to teach "
                 "again (this run is kept)."
             )
@@ -134,29 +136,29 @@ class MazeTutor(TutorApp):
         try:
             record = self.run.add_demo(raw)
         except TutorError as exc:
-            self.message = f"That stroke was not used: {exc}"
+            self.controller.say(f"That stroke was not used: {exc}")
             return
-        self.message = ""
-        if advice is not None:
-            start = self.task.condition_of(self.session.demos[-1])
-            ok = self.run.attempt.demos[-1].followed_rule
-            if advice.rule == 0:
-                self.message = (
-                    f"Every start point already succeeded before demo {record.n_demos}: "
-                    "you could have finished."
-                )
-            elif not ok:
-                gap = np.linalg.norm(start - advice.center)
-                self.message = (
-                    f"Demo {record.n_demos} did not follow rule {advice.rule}: it started "
-                    f"{100 * gap:.1f} cm from the circle's centre (stay within 4 cm)."
-                )
-            else:
-                self.message = f"Demo {record.n_demos} followed rule {advice.rule}."
-        self._autosave()
+        self.controller.say(self._rule_note(advice, record.n_demos))
+        self.controller.autosave()
 
-    def _undo_message(self) -> str:
-        return ""
+    def _rule_note(self, advice, n_demos: int) -> str:
+        """VR: whether demo ``n_demos`` followed the rule ``advice`` gave before it ("" in
+        the other conditions)."""
+        if advice is None:
+            return ""
+        if advice.rule == 0:
+            return (
+                f"Every start point already succeeded before demo {n_demos}: "
+                "you could have finished."
+            )
+        if not self.run.attempt.demos[-1].followed_rule:
+            start = self.task.condition_of(self.session.demos[-1])
+            gap = np.linalg.norm(start - advice.center)
+            return (
+                f"Demo {n_demos} did not follow rule {advice.rule}: it started "
+                f"{100 * gap:.1f} cm from the circle's centre (stay within 4 cm)."
+            )
+        return f"Demo {n_demos} followed rule {advice.rule}."
 
     # ---------------------------------------------------------------- display
 
@@ -178,7 +180,7 @@ class MazeTutor(TutorApp):
             self.pad.show(s.demos, rule_circle=rule, note=note)
         else:
             self.pad.show(
-                s.demos, s.realisations, rec.passed, vis.shown, rule, reasons=rec.reasons
+                s.demos, s.realisations, rec.passed, vis.shown, rule, causes=rec.causes
             )
         self.pad.enabled = not self.finished and not self.read_only
         for name in ("Undo", "Reset", "Finish", "Save"):

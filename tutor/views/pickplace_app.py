@@ -21,10 +21,11 @@ paper, AF, whose picks the tray map shows as it shows BF's batch, and HF, NF wit
 next-demo hint; see :mod:`tutor.tasks.pickplace_protocol`), and the clock counts the
 teaching time the paper's trainees had (15 minutes; 25 s per robot attempt).
 
-Tray colours (as in the paper's good-versus-bad figure): green, the robot succeeds;
-dark red ✗, it fails; blue ●, demonstrated;
-grey, not shown to the trainee (yet). HF marks the hinted plant ★ (its tooltip says so,
-and its button has the CSS class ``lfd-hint``); the hint is also said in words.
+The tray map (:mod:`tutor.views.tray`) colours the plants as in the paper's
+good-versus-bad figure; HF marks the hinted plant ★, and the hint is also said in words.
+Loading a file, undo, reset, bring back, finish, the run's file and its lock, and the
+message are the run controller's (:class:`tutor.framework.controller.RunController`);
+which plant a loaded demo is for is :mod:`tutor.views.pickplace_files`'.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ import time
 import ipywidgets as w
 import numpy as np
 
-from ..errors import InvalidFileError, InvalidParameterError, TutorError
+from ..errors import InvalidParameterError, TutorError
 from ..framework.wording import percent, plural
 from ..paper import PAPER_MEAN_ETA, PAPER_THIRD_RUN_ETA
 from ..payloads import check_choice
@@ -48,17 +49,19 @@ from ..tasks.pickplace_protocol import PickPlaceRun
 from ..tasks.recording import steady_hand
 from .app import TutorApp, guarded
 from .hand import HANDS, choose_hand, controls_html
-from .style import DEMO, FAIL, PASS, UNKNOWN
-from .text import (
-    HINT_GLYPH,
-    compose,
-    finish_summary,
-    hint_sentence,
-    optimal_sentence,
-    plain_reason,
-)
+from .pickplace_files import plant_items
+from .text import compose, finish_summary, hint_sentence, optimal_sentence
+from .tray import STATUS_WORDS, TrayMap, set_trait, tray_status
 
-__all__ = ["PickPlaceTutor", "tray_status", "compare_runs", "PAPER_MEAN_ETA", "PAPER_THIRD_RUN_ETA"]
+__all__ = [
+    "PickPlaceTutor",
+    "tray_status",
+    "compare_runs",
+    "paper_condition",
+    "STATUS_WORDS",
+    "PAPER_MEAN_ETA",
+    "PAPER_THIRD_RUN_ETA",
+]
 
 log = logging.getLogger(__name__)
 
@@ -68,50 +71,7 @@ DOUBLE_CLICK_SECONDS = 0.4
 GUIDE, CANCEL_GUIDE = "Guide the arm", "Cancel guiding"
 #: seconds a scripted (headless) trainee takes to set up before the first move
 SCRIPTED_SETUP_SECONDS = 2.0
-TRAY_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
-TRAY_GLYPHS = {"pass": "✓", "fail": "✗", "demo": "●", "unknown": ""}
-#: glyph colours that stand out on each status colour
-TRAY_TEXT = {"pass": "#000000", "fail": "#ffffff", "demo": "#ffffff", "unknown": "#000000"}
-STATUS_WORDS = {
-    "pass": "the robot succeeds",
-    "fail": "the robot fails",
-    "demo": "demonstrated",
-    "unknown": "not seen yet",
-}
-
-
-def _set(obj, name: str, value) -> None:
-    """Set a widget trait only when it changes (each change is a message to the browser)."""
-    if getattr(obj, name) != value:
-        setattr(obj, name, value)
-
-
-#: the frame of the selected plant's button and of the others
-SELECTED_BORDER, UNSELECTED_BORDER = "3px solid #111111", "1px solid #ffffff"
-
 MISTAKES = {"no mistake": None, "wrong plant": "wrong_plant", "sloppy grab": "sloppy_grab"}
-
-
-def tray_status(run: PickPlaceRun, reveal: bool = False) -> np.ndarray:
-    """Status of each plant as the trainee may see it: pass, fail, demo or unknown (100,).
-
-    Only the plants the condition showed (r, and the plants tested) get pass or fail;
-    ``reveal`` (or a finished or practice run) shows every plant.
-    """
-    status = np.full(len(run.task.conditions), "unknown", dtype=object)
-    rec = run.session.latest
-    if rec is None:
-        return status
-    vis = run.visibility()
-    if reveal or vis.everything:  # the paper's good-versus-bad picture: demos in blue
-        status[:] = np.where(rec.passed, "pass", "fail")
-        status[rec.demonstrated] = "demo"
-        return status
-    status[rec.demonstrated] = "demo"
-    # what the robot just tried is shown as it went, even on a demonstrated plant (RF's
-    # replay is of the plant just demonstrated)
-    status[vis.shown] = np.where(rec.passed[vis.shown], "pass", "fail")
-    return status
 
 
 class PickPlaceTutor(TutorApp):
@@ -149,6 +109,8 @@ class PickPlaceTutor(TutorApp):
     """
 
     demo_columns = ("t", "x", "y", "z", "g")
+    undo_note = "Took back the latest demonstration (its time stays used; it stays in the history)."
+    load_items = staticmethod(plant_items)
 
     def __init__(
         self,
@@ -170,24 +132,9 @@ class PickPlaceTutor(TutorApp):
         self._follower: HandFollower | None = None
         self.rng = np.random.default_rng(seed)
         self.selected = 44
-        rows, cols = self.task.scene.rows, self.task.scene.cols
-        self.plant_buttons = [
-            w.Button(  # made as most plants are first drawn: each change is a message
-                description=TRAY_GLYPHS["unknown"],
-                tooltip=f"{self.task.plant_name(i)}: {STATUS_WORDS['unknown']}",
-                style={
-                    "button_color": TRAY_COLOURS["unknown"],
-                    "text_color": TRAY_TEXT["unknown"],
-                },
-                layout=w.Layout(
-                    width="26px", height="26px", padding="0", border=UNSELECTED_BORDER
-                ),
-            )
-            for i in range(rows * cols)
-        ]
-        for i, b in enumerate(self.plant_buttons):
-            b.on_click(lambda _, i=i: self.select(i))
-        self.tray = self._tray_grid(rows, cols)
+        self.tray_map = TrayMap(self.task, on_select=self.select)
+        self.plant_buttons = self.tray_map.buttons
+        self.tray = self.tray_map.grid
         self.mistake = w.Dropdown(
             options=list(MISTAKES),
             value="no mistake",
@@ -255,7 +202,7 @@ class PickPlaceTutor(TutorApp):
             self.widget = w.VBox([self.widget, view3d])
         self.widget.add_class("lfd-pickplace-tutor")
         if hand_note:
-            self.message = hand_note
+            self.controller.say(hand_note)
         self.refresh()
 
     # ---------------------------------------------------------------- the hand
@@ -292,12 +239,12 @@ class PickPlaceTutor(TutorApp):
         The 3-D view arms its handle; the demonstration arrives when the trainee presses
         Enter there (:meth:`_guided`), as the whole recording.
         """
-        if self._refuse_if_read_only():
+        if self.controller.refuse_if_read_only():
             return
         if self.guiding:
             self.scene3d.stop_guide()
             self._guide_plant = None
-            self.message = "Guiding cancelled: nothing was recorded and no time was used."
+            self.controller.say("Guiding cancelled: nothing was recorded and no time was used.")
             return
         if self.hand != "own":
             raise InvalidParameterError(
@@ -311,7 +258,7 @@ class PickPlaceTutor(TutorApp):
             self._follower, on_end=self._guided, on_cancel=self._guide_cancelled
         )
         self._guide_plant = plant
-        self.message = (
+        self.controller.say(
             f"Guide the arm to {self.task.plant_name(plant)} in the 3-D view: close the hand "
             "on the plant, carry it over the bin, open the hand, then press Enter "
             "(Escape cancels)."
@@ -327,16 +274,16 @@ class PickPlaceTutor(TutorApp):
         finished = self.run.attempt.finished
         with self._busy("The robot is learning from your demonstration…"):
             self.run.demonstrate(plant, raw=end.raw, given="own", setup_seconds=end.setup_seconds)
-        self.message = ""
+        self.controller.say("")
         self._close_if_out_of_time()
         if self.run.attempt.finished != finished or self.message == "":
-            self._autosave()
+            self.controller.autosave()
 
     @guarded
     def _guide_cancelled(self) -> None:
         if self._guide_plant is not None:
             self._guide_plant = None
-            self.message = "Guiding cancelled: nothing was recorded and no time was used."
+            self.controller.say("Guiding cancelled: nothing was recorded and no time was used.")
 
     def guide_as_steady_hand(self, plant: int | None = None, rng=None) -> None:
         """A scripted trainee guides the arm to ``plant`` (default: the selected one).
@@ -371,7 +318,7 @@ class PickPlaceTutor(TutorApp):
 
     def select(self, plant: int) -> None:
         if self.guiding and int(plant) != self._guide_plant:
-            self.message = (
+            self.controller.say(
                 f"You are guiding the arm to {self.task.plant_name(self._guide_plant)}: "
                 f"press Enter in the 3-D view to end, or {CANCEL_GUIDE}, before choosing "
                 "another plant."
@@ -379,21 +326,6 @@ class PickPlaceTutor(TutorApp):
         else:
             self.selected = int(plant)
         self.refresh()
-
-    def _tray_grid(self, rows: int, cols: int) -> w.GridBox:
-        """The plant buttons laid out as the 3-D view's default camera sees the tray: row 1
-        (nearest the robot) at the top, column 1 (the robot's right) on the left; rows and
-        columns are numbered as in the plants' names."""
-        label = {"layout": w.Layout(width="26px", height="26px")}
-        cells = [w.HTML("", **label)]
-        cells += [w.HTML(f"<center><small>{c + 1}</small></center>", **label) for c in range(cols)]
-        for r in range(rows):
-            cells.append(w.HTML(f"<center><small>{r + 1}</small></center>", **label))
-            cells += [self.plant_buttons[r * cols + c] for c in range(cols)]
-        return w.GridBox(
-            cells,
-            layout=w.Layout(grid_template_columns=f"repeat({cols + 1}, 28px)", grid_gap="2px"),
-        )
 
     def _on_demonstrate(self) -> None:
         """The Demonstrate button: busy while the demo runs; a double click gives one demo."""
@@ -412,7 +344,7 @@ class PickPlaceTutor(TutorApp):
     def demonstrate(self, plant=None, mistake=None) -> None:
         """Demonstrate to ``plant`` (default: the selected one); the mistake chooser goes
         back to "no mistake" afterwards."""
-        if self._refuse_if_read_only():
+        if self.controller.refuse_if_read_only():
             return
         if self.guiding:
             raise InvalidParameterError(
@@ -426,13 +358,13 @@ class PickPlaceTutor(TutorApp):
         try:
             with self._busy("The robot is learning from the demonstration…"):
                 self.run.demonstrate(plant, mistake=mistake, rng=self.rng, given="guided")
-            self.message = ""
+            self.controller.say("")
         except TutorError as exc:
-            self.message = str(exc)
+            self.controller.say(str(exc))
         self.mistake.value = "no mistake"
         self._close_if_out_of_time()
         if self.run.attempt.finished != finished or self.message == "":
-            self._autosave()
+            self.controller.autosave()
 
     def _close_if_out_of_time(self) -> None:
         """The paper's cap: when not even the shortest demonstration fits in the time
@@ -449,7 +381,7 @@ class PickPlaceTutor(TutorApp):
 
     @guarded
     def test(self, plants=None) -> None:
-        if self._refuse_if_read_only():
+        if self.controller.refuse_if_read_only():
             return
         plants = [self.selected] if plants is None else list(plants)
         ok = self.run.test(plants)
@@ -457,81 +389,12 @@ class PickPlaceTutor(TutorApp):
             f"{self.task.plant_name(p)}: {'success' if o else 'fails'}"
             for p, o in zip(plants, ok, strict=True)
         )
-        self.message = f"The robot tried {names}."
-        self._autosave()
-
-    def _undo_message(self) -> str:
-        return "Took back the latest demonstration (its time stays used; it stays in the history)."
+        self.controller.say(f"The robot tried {names}.")
+        self.controller.autosave()
 
     @guarded
     def finish(self) -> None:
-        if self._refuse_if_read_only():
-            return
-        self.run.finish()
-        self.message = ""
-        self._autosave()
-
-    def _load_items(self, demos, name: str):
-        """Each demo counts for the plant the file says it was meant for (``conditions``),
-        or else the plant nearest to where the hand closes; a meant condition farther than
-        half a plant spacing from every plant's grasp point is refused."""
-        items = []
-        width = self.task.conditions.shape[1]
-        for i, (raw, meant) in enumerate(zip(demos, demos.conditions, strict=True), start=1):
-            try:
-                if meant is not None and np.asarray(meant).shape != (width,):
-                    raise InvalidFileError(
-                        f"its condition has {np.asarray(meant).size} number(s); a plant's "
-                        f"grasp point has {width} (x, y, z in metres), or write null"
-                    )
-                where = (
-                    self.task.condition_of(self.task.preprocess(raw)) if meant is None else meant
-                )
-                plant = self._plant_at(where, meant is not None)
-            except TutorError as exc:
-                raise InvalidFileError(f"demo {i} of {name}: {exc}") from exc
-            items.append(
-                (
-                    raw,
-                    {
-                        "condition": self.task.conditions[plant],
-                        "seconds": self.task.duration(raw),
-                    },
-                )
-            )
-        total = sum(o["seconds"] for _, o in items)
-        if total > self.run.remaining:
-            raise InvalidFileError(
-                f"the {len(items)} demonstration(s) in {name} take {total:.0f} s, but only "
-                f"{self.run.remaining:.0f} s of this run are left: load fewer "
-                "demonstrations, or load them into the next run"
-            )
-        return items
-
-    def _plant_at(self, where, meant: bool) -> int:
-        """The plant whose grasp point is ``where`` (a meant condition must lie within
-        half a plant spacing of one, in all three coordinates)."""
-        where = np.asarray(where, dtype=float)
-        plant = int(self.task.nearest_condition(where))
-        if meant:
-            grasp = self.task.conditions
-            gap = float(np.linalg.norm(where - grasp[plant]))
-            pitch = float(self.task.scene.pitch)
-            if gap > pitch / 2:
-                hint = ""
-                for unit, scale in (("centimetres", 100.0), ("millimetres", 1000.0)):
-                    if np.linalg.norm(grasp - where / scale, axis=1).min() <= pitch / 2:
-                        hint = (
-                            f" It looks like {unit}: divide the positions and conditions "
-                            f"by {scale:g}."
-                        )
-                        break
-                raise InvalidFileError(
-                    f"its condition {np.round(where, 3).tolist()} is {100 * gap:.1f} cm from "
-                    f"the nearest plant's grasp point; a meant plant must be within half a "
-                    f"plant spacing ({100 * pitch / 2:.1f} cm), in metres.{hint}"
-                )
-        return plant
+        self.controller.finish(needs_demos=False)
 
     def autoplay(self, plants, mistakes=None) -> None:
         """Headless runs only (TUTOR_HEADLESS=1): demonstrate ``plants`` then finish.
@@ -557,46 +420,13 @@ class PickPlaceTutor(TutorApp):
     def _refresh_guide(self) -> None:
         """The Guide button: "Cancel guiding" while guiding; off when the run is over."""
         button = self.buttons[GUIDE]
-        _set(button, "description", CANCEL_GUIDE if self.guiding else GUIDE)
-        _set(button, "icon", "stop" if self.guiding else "hand-paper-o")
-        _set(button, "disabled", (self.run.finished and not self.guiding) or self.read_only)
+        set_trait(button, "description", CANCEL_GUIDE if self.guiding else GUIDE)
+        set_trait(button, "icon", "stop" if self.guiding else "hand-paper-o")
+        set_trait(button, "disabled", (self.run.finished and not self.guiding) or self.read_only)
         if self.guiding:
             button.add_class("lfd-guiding")
         else:
             button.remove_class("lfd-guiding")
-
-    def _draw_tray(self, status, rec, hinted: int | None = None) -> None:
-        """Colour, glyph and tooltip of every plant; exactly one drawn as selected.
-
-        Status is never shown by colour alone: pass ✓, fail ✗, demonstrated ●, not seen
-        blank; the tooltip names the plant, its status and, for a shown failure, why.
-        The ``hinted`` plant (HF) gets ★ after its glyph, a tooltip that says so and the
-        class ``lfd-hint``; its colour and the selected plant's frame are unchanged.
-        """
-        for i, b in enumerate(self.plant_buttons):
-            kind = status[i]
-            words = STATUS_WORDS[kind]
-            if kind == "fail" and rec is not None:
-                words += f": {plain_reason(rec.reasons[i])}"
-            if kind in ("pass", "fail") and rec is not None and rec.demonstrated[i]:
-                words += " (demonstrated)"
-            selected, hint = i == self.selected, i == hinted
-            if hint:
-                words += "; the robot would learn most from here next (hint)"
-            tip = f"{self.task.plant_name(i)}: {words}" + (" (selected)" if selected else "")
-            # one message per widget that changed, not one per trait (a burst of hundreds
-            # of messages is what a busy page or server falls behind on)
-            with b.hold_sync(), b.style.hold_sync(), b.layout.hold_sync():
-                _set(b.style, "button_color", TRAY_COLOURS[kind])
-                _set(b.style, "text_color", TRAY_TEXT[kind])
-                _set(b, "description", TRAY_GLYPHS[kind] + (HINT_GLYPH if hint else ""))
-                _set(b, "tooltip", tip)
-                _set(b.layout, "border", SELECTED_BORDER if selected else UNSELECTED_BORDER)
-                for css, on in (("lfd-selected", selected), ("lfd-hint", hint)):
-                    if on:
-                        b.add_class(css)
-                    else:
-                        b.remove_class(css)
 
     def current_hint(self):
         """HF's next-demo hint while the run is open (None in the other conditions, once
@@ -607,10 +437,10 @@ class PickPlaceTutor(TutorApp):
         try:
             return run.hint()
         except TutorError as exc:
-            self.message = f"No hint this time: {exc}"
+            self.controller.say(f"No hint this time: {exc}")
         except Exception as exc:  # the hint is an extra: it must not cost the trainee the run
             log.exception("the next-demo hint failed")
-            self.message = (
+            self.controller.say(
                 f"No hint this time: something went wrong inside the tutor "
                 f"({type(exc).__name__}). Your demonstrations are kept; carry on without it."
             )
@@ -620,7 +450,7 @@ class PickPlaceTutor(TutorApp):
         run, rec = self.run, self.run.session.latest
         status = tray_status(run, reveal=run.finished)
         hint = self.current_hint()
-        self._draw_tray(status, rec, None if hint is None else hint.plant)
+        self.tray_map.draw(status, rec, self.selected, None if hint is None else hint.plant)
         sf_or_after = run.policy.teacher_picks or run.finished
         busy = self.guiding  # while guiding, only Cancel guiding (and Enter) act
         self.buttons["Test plant"].disabled = (

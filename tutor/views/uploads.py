@@ -3,15 +3,16 @@
 The browser sends a name and the bytes; both are the trainee's (or anyone's) and
 are treated as hostile. The bytes are written under a safe name in a fresh
 temporary folder (the name's unsafe characters replaced, cut to fit a file name,
-the extension kept so ``.json`` and ``.csv`` are told apart), handed to the tutor's
-``load``, and removed. Nothing raised by a :class:`~tutor.errors.TutorError` leaves
-the widget callback: its message goes to the tutor's message line.
+the extension kept so ``.json`` and ``.csv`` are told apart), handed to a ``load``
+callable with the file's name as the trainee knows it (the tutor's controller names
+the file so: :meth:`tutor.framework.controller.RunController.load`), and removed.
+Nothing raised by a :class:`~tutor.errors.TutorError` leaves the widget callback: its
+message goes to the ``report`` callable (the tutor's message line).
 """
 
 from __future__ import annotations
 
 import datetime as dt
-import logging
 import re
 import tempfile
 from collections.abc import Callable
@@ -26,8 +27,6 @@ from ..fileio import MAX_NAME_BYTES, finite_number, save_error
 from ..payloads import check_upload, shown_upload_name
 
 __all__ = ["Upload", "on_upload", "safe_upload_name", "shown_upload_name"]
-
-_log = logging.getLogger(__name__)
 
 #: characters never kept in a stored name: NUL and control characters, path
 #: separators, and what Windows refuses in names
@@ -104,46 +103,21 @@ def safe_upload_name(name) -> str:
     return stem + suffix
 
 
-def _message_line(load: Callable) -> Callable[[str], None]:
-    """Where ``load``'s messages go: the tutor's ``message`` and ``refresh()``.
-
-    ``load`` is normally a tutor's bound ``load`` method; a tutor shows its
-    ``message`` in its panel when it refreshes. Anything else gets a log warning.
-    """
-    owner = getattr(load, "__self__", None)
-    if hasattr(owner, "message") and callable(getattr(owner, "refresh", None)):
-
-        def show(text: str) -> None:
-            owner.message = text
-            owner.refresh()
-
-        return show
-    return _log.warning
-
-
-def _retitle(load: Callable, stored: str, shown: str) -> None:
-    """Put the trainee's file name back into the tutor's message where it names the stored one."""
-    owner = getattr(load, "__self__", None)
-    message = getattr(owner, "message", None)
-    if stored != shown and isinstance(message, str) and stored in message:
-        owner.message = message.replace(stored, shown)
-        owner.refresh()
-
-
 def on_upload(
-    load: Callable[[Path], None], report: Callable[[str], None] | None = None
+    load: Callable[[Path, str], None], report: Callable[[str], None]
 ) -> Callable[[dict], None]:
-    """An observer for ``FileUpload.value`` that hands the first file to ``load(path)``.
+    """An observer for ``FileUpload.value`` that hands the first file to ``load``.
 
     Parameters
     ----------
     load : callable
-        Takes the path of the stored upload, whose name is the trainee's unless
-        that was unsafe. Where the tutor's message names the stored file, the
-        trainee's own name is put back.
-    report : callable, optional
-        Shows a message to the trainee; by default the tutor's message line (the
-        ``message`` attribute and ``refresh()`` of the object ``load`` is bound to).
+        ``load(path, name)``: ``path`` is the stored upload, whose name is the
+        trainee's unless that was unsafe; ``name`` is the file as the trainee knows it
+        (:func:`~tutor.payloads.shown_upload_name`), for ``load``'s messages to name.
+        A tutor passes its ``load``, which forwards to its controller.
+    report : callable
+        ``report(text)`` shows a message to the trainee (a tutor's ``tell``: its
+        message line).
 
     Notes
     -----
@@ -154,7 +128,6 @@ def on_upload(
     :class:`~tutor.errors.TutorError` raised by ``load`` (or a failure to store the
     upload) is reported, never raised out of the callback.
     """
-    show = report if report is not None else _message_line(load)
 
     def observer(change: dict) -> None:
         files = change.get("new") if isinstance(change, dict) else None
@@ -163,7 +136,7 @@ def on_upload(
         try:
             raw_name, content = check_upload(files)  # what the page sent, checked
         except InvalidPayloadError as exc:
-            show(f"Nothing was loaded: {exc}")
+            report(f"Nothing was loaded: {exc}")
             return
         shown = shown_upload_name(raw_name)
         name = safe_upload_name(raw_name)
@@ -175,15 +148,14 @@ def on_upload(
                 try:
                     path.write_bytes(content)
                 except OSError as exc:
-                    raise save_error(name, exc) from exc
-                load(path)
-            _retitle(load, name, shown)
+                    raise save_error(shown, exc) from exc
+                load(path, shown)
         except SaveError as exc:  # the upload, or the tutor's autosave, could not be written
-            show(str(exc).replace(name, shown))
+            report(str(exc))
         except TutorError as exc:
-            text = str(exc).replace(name, shown)
-            show(text if text.startswith("Nothing was loaded") else f"Nothing was loaded: {text}")
+            text = str(exc)
+            report(text if text.startswith("Nothing was loaded") else f"Nothing was loaded: {text}")
         except OSError as exc:  # the temporary folder could not be made
-            show(f"Nothing was loaded: {shown} could not be stored for reading ({exc.strerror}).")
+            report(f"Nothing was loaded: {shown} could not be stored for reading ({exc.strerror}).")
 
     return observer
