@@ -205,11 +205,11 @@ def class_command(args) -> None:
 
 
 def adaptive_plan(args):
-    """The checked :class:`~tutor.study.adaptive.StudyPlan` of ``lfd-tutor adaptive``."""
+    """The checked :class:`~tutor.study.adaptive_plan.StudyPlan` of ``lfd-tutor adaptive``."""
     import dataclasses
 
     from .errors import InvalidParameterError
-    from .study.adaptive import QUICK, StudyPlan, check_plan
+    from .study.adaptive_plan import QUICK, StudyPlan, check_plan
 
     if args.quick:
         if args.n is not None:

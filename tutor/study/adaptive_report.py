@@ -27,7 +27,8 @@ import pandas as pd
 from .. import paper
 from ..errors import SaveError
 from . import adaptive_stats as st
-from .adaptive import BASELINE, POLICIES, StudyResult, is_secondary
+from .adaptive import StudyResult
+from .adaptive_plan import BASELINE, POLICIES, is_secondary
 from .report import check_out_dir, pct
 
 __all__ = [
@@ -431,7 +432,7 @@ def load_study(folder) -> StudyResult:
 
     from ..errors import InvalidFileError
     from ..fileio import read_json
-    from .adaptive import StudyPlan
+    from .adaptive_plan import StudyPlan
 
     folder = Path(folder)
     data = read_json(folder / "adaptive_plan.json", "adaptive study's plan")
