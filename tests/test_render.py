@@ -15,7 +15,8 @@ import pytest
 
 from tutor.errors import InvalidParameterError
 from tutor.tasks.pickplace import PickPlaceTask
-from tutor.views.scene3d import WORKING, Scene3D
+from tutor.views.scene3d import Scene3D
+from tutor.views.scene_widget import WORKING
 
 
 @pytest.fixture(scope="module")

@@ -1,10 +1,5 @@
 r"""The pick-and-place scene of Experiment 2 in 3-D (Meshcat): robot, tray, bin, trails.
 
-(About 680 lines, over the project's ~600: :class:`Scene3D` is one object whose drawing
-methods share the recorder, the scene's state and what was sent last, which is what
-lets it send only what changed; its recorder, meshes, page and animation packing are
-already modules of their own.)
-
 What the trainee sees
 ---------------------
 - The table, the 10 x 10 tray and the bin (grey), and the Franka Panda with its
@@ -55,11 +50,19 @@ notebook viewer receives the changes at :meth:`Scene3D.refresh` (which
 
 The modules
 -----------
-This one draws (:class:`Scene3D`: the plants' status colours, trails, the animation,
-the widget); :mod:`tutor.views.meshcat_recorder` records and replays the commands;
-:mod:`tutor.views.scene_meshes` holds the geometry (robot meshes, table, tray, bin,
-plants, hand); :mod:`tutor.views.scene_page` chooses live or static and builds the
-page and the notebook widget from the static files in ``tutor/views/static/``.
+This one draws (:class:`Scene3D`: the scene, the robot, the plants' status colours,
+trails, the animation). :class:`Scene3D` is one object whose parts share the recorder,
+the scene's state and what was sent last (which lets it send only what changed); its
+other jobs are in their own modules, two of them as mixins of the class:
+:mod:`tutor.views.scene_widget` shows it (the notebook widget and its caption, the
+page's messages, the working line, the static page); :mod:`tutor.views.scene_guide`
+guides the arm with the trainee's hand; :mod:`tutor.views.scene_run` says what a
+teaching run shows (the trails, the one animation); :mod:`tutor.views.meshcat_recorder`
+records and replays the commands; :mod:`tutor.views.scene_animation` packs an
+animation; :mod:`tutor.views.scene_meshes` holds the geometry (robot meshes, table,
+tray, bin, plants, hand); :mod:`tutor.views.scene_page` chooses live or static and
+builds the page and the notebook widget from the static files in
+``tutor/views/static/``.
 
 Shapes
 ------
@@ -71,19 +74,14 @@ status : (100,) of str
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
-import html
 import uuid
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidParameterError, InvalidPayloadError
-from ..fileio import atomic_write_text
-from ..payloads import check_view_message, safely
-from .meshcat_recorder import SceneRecorder, empty_animation, frame_commands
+from ..errors import InvalidParameterError
+from .meshcat_recorder import SceneRecorder, empty_animation
 from .scene_animation import (
     Track,
     key_samples,
@@ -92,7 +90,7 @@ from .scene_animation import (
     step_track,
     transform_tracks,
 )
-from .scene_guide import GUIDE_MESSAGES, Guide
+from .scene_guide import Guide, GuidingMixin
 from .scene_meshes import (
     HAND_CLOSED,
     HAND_OPEN,
@@ -102,7 +100,9 @@ from .scene_meshes import (
     plant_ball,
     robot_meshes,
 )
-from .scene_page import choose_mode, live_page_url, page, scene_data, viewer_widget_class
+from .scene_page import choose_mode
+from .scene_run import run_picture
+from .scene_widget import SceneWidgetMixin
 from .style import DEMO, FAIL, PASS, UNKNOWN
 
 __all__ = [
@@ -110,7 +110,6 @@ __all__ = [
     "SceneRecorder",
     "AnimationInfo",
     "STATUS_COLOURS",
-    "WORKING",
     "HAND_OPEN",
     "HAND_CLOSED",
     "choose_mode",
@@ -123,10 +122,6 @@ STATUS_COLOURS = {"pass": PASS, "fail": FAIL, "demo": DEMO, "unknown": UNKNOWN}
 #: (:meth:`Scene3D.scene_centre`). Meshcat's camera orbits the viewer's origin, so the
 #: whole scene is shifted to put its middle there.
 CAMERA_POSITION = (0.75, -0.7, 0.62)
-#: The path of the live viewer's "update applied" stamp (its page handles it; not drawn).
-STAMP = "/lfd-stamp"
-#: What the view says while the kernel learns from a demonstration (:meth:`Scene3D.working`).
-WORKING = "Working: the robot is learning from your demo..."
 
 
 @dataclass(frozen=True)
@@ -161,8 +156,12 @@ class AnimationInfo:
 # --------------------------------------------------------------------------- the scene
 
 
-class Scene3D:
+class Scene3D(GuidingMixin, SceneWidgetMixin):
     """The pick-and-place scene in Meshcat, refreshed by :class:`PickPlaceTutor`.
+
+    It draws; showing it (the widget, :meth:`refresh`, :meth:`working`,
+    :meth:`static_html`) is :class:`~tutor.views.scene_widget.SceneWidgetMixin`'s and
+    guiding the arm (:meth:`start_guide`) :class:`~tutor.views.scene_guide.GuidingMixin`'s.
 
     Parameters
     ----------
@@ -450,11 +449,11 @@ class Scene3D:
         Called by :class:`~tutor.views.pickplace_app.PickPlaceTutor` after each step.
         The animation is the robot's latest shown attempt (the plant just tested, the
         first failing one of the batch, or the replay), or the latest demonstration
-        when the robot showed nothing (NF).
+        when the robot showed nothing (NF); :func:`tutor.views.scene_run.run_picture`
+        chooses what to draw.
         """
-        session, task = run.session, run.task
         key = (
-            id(session),
+            id(run.session),
             len(run.record.events),
             len(run.record.attempts),
             run.finished,
@@ -463,382 +462,14 @@ class Scene3D:
         if key == self._shown_key:  # e.g. the trainee only selected another plant
             return
         self.set_status(status)
-        demos = [d[:, -4:] for d in session.demos]
-        self.draw_trails("demos", demos, DEMO)
-        rec = session.latest
-        shown = np.zeros(0, int)
-        if rec is not None:  # what the trainee may see: the run decides, as for the tray
-            vis = run.visibility()
-            shown = np.arange(len(task.conditions)) if vis.everything else vis.shown
-        R = session.realisations if rec is not None else None
-        ok = [p for p in shown if rec.passed[p]] if rec is not None else []
-        bad = [p for p in shown if not rec.passed[p]] if rec is not None else []
-        if R is not None:
-            self.draw_trails("passed", [R[p][:, -4:] for p in ok], PASS)
-            self.draw_trails("failed", [R[p][:, -4:] for p in bad], FAIL)
-        else:
-            self.draw_trails("passed", [], PASS)
-            self.draw_trails("failed", [], FAIL)
-        plant = self._pick_plant(run, shown)
-        if plant is not None:
-            passed = bool(rec.passed[plant])
-            reason = rec.reasons[plant]
-            label = f"The robot's attempt at {task.plant_name(plant)}: " + (
-                "success." if passed else f"fails ({reason})."
-            )
-            self.animate(R[plant][:, -4:], label, PASS if passed else FAIL)
-        elif demos:
-            plant = task.nearest_condition(session.conditions[-1])
-            label = f"Your demonstration {len(demos)} ({task.plant_name(plant)})."
-            self.animate(demos[-1], label, DEMO)
+        picture = run_picture(run)
+        for name, (paths, colour) in picture.trails.items():
+            self.draw_trails(name, paths, colour)
+        if picture.animation is not None:
+            self.animate(*picture.animation)
         else:
             self.clear_animation()
         self._shown_key = key
         self._check_live()
         self.refresh()
         self._stamp_live()
-
-    def _stamp_live(self) -> None:
-        """Tell the live viewer that an update is complete: its page (the tutor's, see
-        :mod:`tutor.views.meshcat_server`) records the number and the time it applied
-        it (``document.body.dataset.updates`` and ``.appliedAt``)."""
-        if self.recorder.live is None:
-            return
-        import umsgpack
-
-        self._stamp += 1
-        command = {
-            "type": "set_property",
-            "path": STAMP,
-            "property": "update",
-            "value": self._stamp,
-        }
-        self.recorder.forward("set_property", STAMP, umsgpack.packb(command))
-
-    @staticmethod
-    def _pick_plant(run, shown):
-        rec = run.session.latest
-        if rec is None or len(shown) == 0:
-            return None
-        tests = _tests_after(run, rec.n_demos)
-        if tests and tests[-1].plants:
-            return int(tests[-1].plants[-1])
-        own = run.task.nearest_condition(run.session.conditions[-1])
-        if own in set(int(p) for p in rec.shown):
-            return int(own)
-        failing = [int(p) for p in shown if not rec.passed[p]]
-        return failing[0] if failing else int(shown[0])
-
-    # ------------------------------------------------------------------ output
-
-    def _check_live(self) -> None:
-        if self.mode == "live" and self.recorder.live is None:
-            self.mode = "static"
-            self.message = (
-                f"{self.recorder.live_error or 'no live viewer'}: showing the scene in the "
-                "notebook instead."
-            )
-
-    def _scene_chunks(self) -> list[bytes]:
-        """The whole scene as gzipped command frames: the robot's meshes (cached), the rest."""
-        robot_ids = set()
-        chunks = []
-        if self._robot is not None:
-            robot_ids = {id(c[2]) for c in self._robot.commands}
-            chunks.append(self._robot.gz)
-        rest = [c for c in self.recorder.commands() if id(c[2]) not in robot_ids]
-        chunks.append(frame_commands(rest))
-        return chunks
-
-    def static_html(self, title: str = "lfd-tutor: pick and place in 3-D") -> str:
-        """The scene as one self-contained HTML page (meshcat's viewer script inside)."""
-        chunks = self._scene_chunks()
-        if self._robot is not None:  # its base64 is cached too
-            chunks[0] = self._robot.chunk
-        caption = html.escape(self.animation.label if self.animation else "")
-        return page(title, scene_data(chunks), self.legend_html(), caption)
-
-    def save_html(self, path) -> Path:
-        """Write :meth:`static_html` to ``path`` (atomically); returns the path.
-
-        Raises
-        ------
-        SaveError
-            In plain words: a name or path too long, no permission, a full disk
-            (:func:`tutor.fileio.atomic_write_text`).
-        """
-        return atomic_write_text(path, self.static_html())
-
-    @staticmethod
-    def legend_html() -> str:
-        dot = (
-            "<span style='display:inline-block;width:11px;height:11px;border-radius:50%;"
-            "background:{};margin:0 4px 0 10px;vertical-align:middle'></span>{}"
-        )
-        line = (
-            "<span style='display:inline-block;width:16px;height:3px;background:{};"
-            "margin:0 4px 0 10px;vertical-align:middle'></span>{}"
-        )
-        items = [
-            dot.format(PASS, "succeeds"),
-            dot.format(FAIL, "fails"),
-            dot.format(DEMO, "demonstrated"),
-            dot.format(UNKNOWN, "not seen yet"),
-            line.format(DEMO, "your demos"),
-            dot.format(HAND_OPEN, "hand open"),
-            dot.format(HAND_CLOSED, "hand closed"),
-        ]
-        return "<span style='font-size:12px'>" + "".join(items) + "</span>"
-
-    def _make_view(self):
-        """The viewer widget: meshcat's page in a frame, from the live server (``src``) or
-        fed over the widget's comm (``page``); both pass the guide's messages."""
-        cls = viewer_widget_class()
-        if self.mode == "live":
-            url = live_page_url(self.recorder.web_url or "", self.scene_id)
-            view = cls(height=self.height, src=url)
-        else:
-            view = cls(height=self.height, page=page("3-D view", "", "", ""))
-            self.recorder.listeners.append(self._collect)
-        view.on_msg(self._on_view_msg)
-        return view
-
-    def _collect(self, kind, path, packed) -> None:
-        if self._pending is not None:  # a browser shows the view: keep what changes
-            self._pending.append((kind, path, packed))
-
-    def _on_view_msg(self, _widget, content, buffers) -> None:
-        """A message from the page's view (:meth:`receive`). One the tutor does not
-        understand is said in the caption and changes nothing (a refused guide message
-        is answered, so that the page guides on); nothing raises out of here."""
-
-        def act():
-            try:
-                self.receive(content, buffers)
-            except InvalidPayloadError as exc:
-                kind = content.get("type") if isinstance(content, dict) else None
-                if self._guide is not None and kind in GUIDE_MESSAGES:
-                    self._send_view(
-                        {"type": "guide", "cmd": "refused", "what": kind, "words": str(exc)}
-                    )
-                raise
-
-        def say(text: str) -> None:
-            self.message = f"{text[:1].upper()}{text[1:]}" + ("" if text.endswith(".") else ".")
-            self.refresh()
-
-        safely(act, say)
-
-    def receive(self, content, buffers=()) -> None:
-        """Act on a message the page's view sent: a hello (a browser opened the view: the
-        whole scene goes to it, then changes only) or the guide's move, end or cancel
-        (:mod:`tutor.views.scene_guide`).
-
-        Raises
-        ------
-        InvalidPayloadError
-            A message the tutor does not know, or a guide message that is not one
-            (:mod:`tutor.payloads`); nothing changes and guiding goes on.
-        """
-        kind = content.get("type") if isinstance(content, dict) else None
-        if kind in GUIDE_MESSAGES:
-            self._guide_message(kind, content, list(buffers or []))
-            return
-        view = check_view_message(content)
-        if view is None:
-            return
-        if self.mode == "static":
-            # a browser (re)opened the view: send it the whole scene, then changes only
-            self._pending = []
-            self._send_view({"type": "full", "to": view}, self._scene_chunks())
-        if self._guide is not None:  # a reloaded page is armed again
-            self._send_view(self._guide.start_message())
-
-    def _send_view(self, content: dict, buffers=None) -> None:
-        if self._view is not None:
-            self._view.send(content, buffers)
-
-    # ------------------------------------------------------------------ guiding the arm
-
-    @property
-    def guiding(self) -> bool:
-        """Whether the trainee is guiding the arm in this view now."""
-        return self._guide is not None
-
-    def start_guide(self, follower, on_end, on_cancel=None) -> None:
-        """Let the trainee guide the arm with the handle in the view (keys, mouse, gamepad).
-
-        The animation stops and the robot goes to the follower's start; the page arms its
-        guide. When the trainee presses Enter, ``on_end`` gets the recording
-        (:class:`~tutor.views.scene_guide.GuideEnd`); Escape calls ``on_cancel``. After
-        either, the view shows the arm at its start again.
-
-        Parameters
-        ----------
-        follower : HandFollower
-            :class:`tutor.robot.follow.HandFollower` of this scene.
-        on_end : callable(GuideEnd)
-        on_cancel : callable(), optional
-        """
-        from ..robot.follow import guide_limits
-
-        sc = self.scene
-        links = [self._node_path(n) for n in self._robot.node_names] if self._robot else []
-        top = float(sc.table_center[2] + sc.table_size[2] / 2)
-        guide = Guide(
-            follower,
-            on_end,
-            on_cancel,
-            links,
-            self._node_path("lfd/hand"),
-            guide_limits(sc),
-            table=top,
-        )
-        self.clear_animation()
-        self.show_configuration(guide.state.q)
-        self._guide = guide
-        self.refresh()
-        self._stamp_live()
-        self._send_view(guide.start_message())
-
-    def stop_guide(self) -> None:
-        """Stop guiding (no callback is called); the view shows the arm at its start."""
-        if self._guide is None:
-            return
-        self._guide = None
-        self._send_view({"type": "guide", "cmd": "stop"})
-        self.show_configuration(self.scene.start_configuration)
-        self.refresh()
-        self._stamp_live()
-
-    def _guide_message(self, kind: str, content: dict, buffers: list) -> None:
-        guide = self._guide
-        if guide is None:
-            return  # a move still on its way when guiding stopped
-        if kind == "guide-move":
-            self._send_view(*guide.move(content))
-        elif kind == "guide-end":
-            end = guide.end(content, buffers)
-            self.stop_guide()
-            self.message = ""
-            guide.on_end(end)
-        else:
-            self.stop_guide()
-            if guide.on_cancel is not None:
-                guide.on_cancel()
-
-    def _flush(self) -> None:
-        if self._pending:
-            self._view.send({"type": "update"}, [frame_commands(self._pending)])
-            self._pending = []
-
-    def _caption_html(self) -> str:
-        parts = [self.legend_html()]
-        if self.animation is not None:
-            parts.append(f"<div><b>Animated:</b> {html.escape(self.animation.label)}</div>")
-        how = (
-            "The attempt plays once by itself after each step; <b>Replay</b> plays it again. "
-            "Drag to turn, right-drag to move; click the view, then scroll to zoom "
-            "(Escape gives the wheel back to the page)."
-        )
-        if self.mode == "live" and self.recorder.web_url:
-            url = html.escape(live_page_url(self.recorder.web_url, self.scene_id))
-            how += f" <a href='{url}' target='_blank'>Open in its own tab</a>."
-        parts.append(f"<div style='font-size:12px;color:#555'>{how}</div>")
-        if self.message:
-            parts.append(f"<div class='lfd-message'>{html.escape(self.message)}</div>")
-        if self._working:
-            parts.append(
-                "<div class='lfd-working' role='status' style='font-weight:bold'>"
-                f"&#8987; {html.escape(self._working)}</div>"
-            )
-        return "".join(parts)
-
-    @property
-    def widget(self):
-        """The view as an ipywidget (caption, legend and the viewer)."""
-        if self._widget is None:
-            import ipywidgets as w
-
-            self._caption = w.HTML()
-            self.replay_button = w.Button(
-                description="Replay",
-                icon="play",
-                tooltip="Play the robot's motion shown here again",
-                layout=w.Layout(width="100px", flex="0 0 auto"),
-            )
-            self.replay_button.add_class("lfd-replay")
-            self.replay_button.on_click(lambda _: self.replay())
-            self._view = self._make_view()
-            self._header = w.HBox([self.replay_button, self._caption])
-            self._widget = w.VBox([self._header, self._view])
-            self._widget.add_class("lfd-scene3d")
-            self.refresh()
-        return self._widget
-
-    def refresh(self) -> None:
-        """Update the widget: the caption (the :meth:`working` line goes), and the changes
-        for the notebook viewer."""
-        if self._widget is None:
-            self._working = ""
-            return
-        was_working, self._working = self._working, ""
-        self._caption.value = self._caption_html()
-        if was_working and isinstance(self._view, viewer_widget_class()):
-            self._view.send({"type": "working", "text": ""})
-        self.replay_button.disabled = self.animation is None
-        if self.mode == "static" and not self._view.src:
-            self._flush()
-        elif self.mode == "static":  # the live viewer died: switch to the notebook viewer
-            self._view = self._make_view()
-            self._widget.children = (self._header, self._view)
-
-    def working(self, text: str = WORKING) -> None:
-        """Say ``text`` over the view now (the caption's line and, in the notebook viewer,
-        a line over the picture) until the next :meth:`refresh`.
-
-        Call it before a slow step (a demonstration the robot learns from, a batch of
-        tests): the line reaches the browser at once, while the step runs.
-
-        Raises
-        ------
-        InvalidParameterError
-            ``text`` is not a non-empty string of at most 200 characters.
-        """
-        if not (isinstance(text, str) and 0 < len(text.strip()) <= 200):
-            raise InvalidParameterError(
-                f"the working line must be a text of 1 to 200 characters, got {text!r}"
-            )
-        self._working = text.strip()
-        self._show_working()
-
-    @contextlib.contextmanager
-    def busy(self, text: str = WORKING):
-        """``with scene.busy(): ...``: :meth:`working` for the block; the line goes when
-        the block ends, even if the block drew nothing (or raised)."""
-        self.working(text)
-        try:
-            yield self
-        finally:
-            if self._working:
-                self.refresh()
-
-    def _show_working(self) -> None:
-        if self._widget is None:
-            return
-        self._caption.value = self._caption_html()
-        if isinstance(self._view, viewer_widget_class()):
-            self._view.send({"type": "working", "text": self._working})
-
-    def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
-
-
-def _tests_after(run, n_demos: int | None = None) -> list:
-    """The robot's tests the trainee asked for in ``run``'s current attempt, after
-    ``n_demos`` demos (all of them when None): :class:`~tutor.framework.record.Test`
-    records, read from the typed run record."""
-    tests = run.attempt.tests
-    return list(tests) if n_demos is None else [t for t in tests if t.after_demo == n_demos]

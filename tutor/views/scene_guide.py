@@ -9,6 +9,8 @@ kernel. While the trainee guides, each move (at most one in flight) also comes h
 (:class:`tutor.robot.follow.HandFollower`) and answers with the links' placements, so
 that the page draws the whole arm where the hand is, a link in collision in red and
 the words saying what is wrong (out of reach, on the table).
+:class:`GuidingMixin` gives :class:`~tutor.views.scene3d.Scene3D` its part: it arms a
+:class:`Guide` (``start_guide``), stops it and hands it the page's messages.
 
 Messages (widget custom messages; :mod:`tutor.views.scene_page`'s widget passes them
 between the page in its frame and the kernel):
@@ -40,7 +42,7 @@ import numpy as np
 from ..errors import InvalidParameterError
 from ..payloads import check_guide_end, check_guide_move
 
-__all__ = ["GuideEnd", "Guide", "GUIDE_MESSAGES"]
+__all__ = ["GuideEnd", "Guide", "GuidingMixin", "GUIDE_MESSAGES"]
 
 #: the message types the page sends while guiding
 GUIDE_MESSAGES = ("guide-move", "guide-end", "guide-cancel")
@@ -168,3 +170,81 @@ class Guide:
         """
         raw, setup = check_guide_end(content, buffers)
         return GuideEnd(raw, setup)
+
+
+class GuidingMixin:
+    """Guiding the arm in :class:`~tutor.views.scene3d.Scene3D`: start, stop, the page's moves.
+
+    It uses what :class:`~tutor.views.scene3d.Scene3D` sets up: ``scene``, the robot's
+    meshes ``_robot``, ``_guide``, ``message``, and its drawing
+    (``_node_path``, ``clear_animation``, ``show_configuration``) and output
+    (``refresh``, ``_stamp_live``, ``_send_view``:
+    :class:`~tutor.views.scene_widget.SceneWidgetMixin`).
+    """
+
+    @property
+    def guiding(self) -> bool:
+        """Whether the trainee is guiding the arm in this view now."""
+        return self._guide is not None
+
+    def start_guide(self, follower, on_end, on_cancel=None) -> None:
+        """Let the trainee guide the arm with the handle in the view (keys, mouse, gamepad).
+
+        The animation stops and the robot goes to the follower's start; the page arms its
+        guide. When the trainee presses Enter, ``on_end`` gets the recording
+        (:class:`~tutor.views.scene_guide.GuideEnd`); Escape calls ``on_cancel``. After
+        either, the view shows the arm at its start again.
+
+        Parameters
+        ----------
+        follower : HandFollower
+            :class:`tutor.robot.follow.HandFollower` of this scene.
+        on_end : callable(GuideEnd)
+        on_cancel : callable(), optional
+        """
+        from ..robot.follow import guide_limits
+
+        sc = self.scene
+        links = [self._node_path(n) for n in self._robot.node_names] if self._robot else []
+        top = float(sc.table_center[2] + sc.table_size[2] / 2)
+        guide = Guide(
+            follower,
+            on_end,
+            on_cancel,
+            links,
+            self._node_path("lfd/hand"),
+            guide_limits(sc),
+            table=top,
+        )
+        self.clear_animation()
+        self.show_configuration(guide.state.q)
+        self._guide = guide
+        self.refresh()
+        self._stamp_live()
+        self._send_view(guide.start_message())
+
+    def stop_guide(self) -> None:
+        """Stop guiding (no callback is called); the view shows the arm at its start."""
+        if self._guide is None:
+            return
+        self._guide = None
+        self._send_view({"type": "guide", "cmd": "stop"})
+        self.show_configuration(self.scene.start_configuration)
+        self.refresh()
+        self._stamp_live()
+
+    def _guide_message(self, kind: str, content: dict, buffers: list) -> None:
+        guide = self._guide
+        if guide is None:
+            return  # a move still on its way when guiding stopped
+        if kind == "guide-move":
+            self._send_view(*guide.move(content))
+        elif kind == "guide-end":
+            end = guide.end(content, buffers)
+            self.stop_guide()
+            self.message = ""
+            guide.on_end(end)
+        else:
+            self.stop_guide()
+            if guide.on_cancel is not None:
+                guide.on_cancel()
