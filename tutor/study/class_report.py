@@ -1,6 +1,6 @@
 """A class's results beside the paper's and beside a simulated class of the same size.
 
-:func:`analyse_class` runs the paper's statistics on a :class:`~.classroom.ClassResult`
+:func:`analyse_class` runs the paper's statistics on a :class:`~.class_result.ClassResult`
 (the same functions as the simulated cohorts, :mod:`tutor.study.stats`):
 
 - Experiment 1: repeated-measures ANOVA of η over NF, VF, VR with Mauchly's sphericity
@@ -30,7 +30,7 @@ from ..errors import SaveError
 from ..framework.protocol import EXPERIMENTS
 from ..framework.wording import NOT_A_NUMBER, plural, sentence
 from . import stats
-from .classroom import ClassResult
+from .class_result import ClassResult
 from .report import _jsonable, check_out_dir, load_result, test_lines
 from .tables import has_no_number, readable_label, readable_table
 

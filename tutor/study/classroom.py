@@ -27,6 +27,9 @@ function as the simulated cohorts (:func:`tutor.study.cohort.rows_of`), so the c
 rows have the cohort's columns (``teacher`` is the trainee's number in the class, and
 ``trainee``, ``trainee_key`` and ``file`` say whose run it is).
 
+What a read gives is in :mod:`.class_result`; the worker pool, progress and refresh
+cache in :mod:`.class_workers`; which copy of a run is counted in :mod:`.class_copies`.
+
 Examples
 --------
 >>> result = read_class("class_folder/", experiment=1)      # doctest: +SKIP
@@ -36,10 +39,8 @@ Examples
 from __future__ import annotations
 
 import os
-import sys
 import zipfile
-from collections import Counter
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path, PurePosixPath
 
@@ -49,10 +50,11 @@ from ..errors import InvalidFileError, InvalidParameterError, LimitError, TutorE
 from ..framework.assignment import ClassPlan, load_plan
 from ..framework.protocol import EXPERIMENTS
 from ..framework.record import RunRecord
-from ..framework.wording import plural, sentence
-from ..runtime import headless
-from ..workers import one_blas_thread, process_pool
+from ..framework.wording import sentence
+from .class_copies import _apart, _duplicates
 from .class_files import ZIP_AGAIN, close_zips, hidden, list_class, read_run_file
+from .class_result import PROBLEMS, ClassResult, FileOutcome
+from .class_workers import _Memo, _Pool, _progress
 from .cohort import StudySettings, _task, rows_of
 
 __all__ = [
@@ -62,17 +64,6 @@ __all__ = [
     "read_class",
     "PROBLEMS",
 ]
-
-#: the reasons a file is not counted (``FileOutcome.kind``), in the order reports list them
-PROBLEMS = (
-    "unreadable",
-    "not a run record",
-    "cannot be replayed",
-    "duplicate",
-    "practice",
-    "unfinished",
-    "no demonstrations",
-)
 
 
 def _run_class(experiment: int):
@@ -87,211 +78,6 @@ def _run_class(experiment: int):
 
 #: experiment -> a function giving its TeachingRun subclass (imported on first use)
 RUN_CLASSES = {1: lambda: _run_class(1), 2: lambda: _run_class(2)}
-
-
-@dataclass(frozen=True)
-class FileOutcome:
-    """What became of one file of the class.
-
-    Attributes
-    ----------
-    file : str
-        Its path relative to the class folder (or inside the class zip); a file in a
-        trainee's zip is under the zip's path (``ann.zip/NF.json``).
-    kind : str
-        ``"counted"``, ``"other experiment"`` or one of :data:`PROBLEMS`.
-    reason : str
-        In plain words, with what to do when it is a problem.
-    trainee, trainee_key, condition, run, n_demos, finished, practice
-        What the record says (empty when it could not be read).
-    """
-
-    file: str
-    kind: str
-    reason: str = ""
-    trainee: str = ""
-    trainee_key: str = ""
-    condition: str = ""
-    run: int = 0
-    n_demos: int = 0
-    finished: bool = False
-    practice: bool = False
-
-    @property
-    def counted(self) -> bool:
-        return self.kind == "counted"
-
-    def to_dict(self) -> dict:
-        return {
-            "file": self.file,
-            "kind": self.kind,
-            "reason": self.reason,
-            "trainee": self.trainee,
-            "trainee_key": self.trainee_key,
-            "condition": self.condition,
-            "run": self.run,
-            "n_demos": self.n_demos,
-            "finished": self.finished,
-            "practice": self.practice,
-            "counted": self.counted,
-        }
-
-
-@dataclass
-class ClassResult:
-    """A class read back by :func:`read_class`.
-
-    Attributes
-    ----------
-    experiment : int
-    source : str
-        The folder or zip that was read.
-    runs : pandas.DataFrame
-        One row per counted run, with the simulated cohort's columns (see the module).
-    demos : pandas.DataFrame
-        One row per demonstration of each counted run.
-    files : list of FileOutcome
-        Every run file looked at, counted or not, in path order.
-    """
-
-    experiment: int
-    source: str
-    runs: pd.DataFrame
-    demos: pd.DataFrame
-    files: list[FileOutcome] = field(default_factory=list)
-    settings: StudySettings = field(default_factory=StudySettings)
-    #: the class plan's trainees (folder key -> (name, Experiment 2 condition or "")), when
-    #: a plan was given: those without a file are listed as missing
-    roster: dict = field(default_factory=dict)
-    #: runs read from old records without a run id (copies judged by trainee, condition
-    #: and run number, as before run ids)
-    old_runs: int = 0
-
-    @property
-    def old_runs_note(self) -> str:
-        """E.g. "2 old runs without a run id: duplicates judged by name, condition and
-        run", or "" when every record has an id."""
-        if not self.old_runs:
-            return ""
-        runs = plural(self.old_runs, "old run")
-        return f"{runs} without a run id: duplicates judged by name, condition and run"
-
-    @property
-    def name_clashes(self) -> list[FileOutcome]:
-        """The counted files whose trainee shares a name with a trainee in another folder."""
-        return [f for f in self.files if f.counted and "@" in f.trainee_key]
-
-    @property
-    def notes(self) -> list[str]:
-        """What the educator should know about how files were told apart (name clashes,
-        old records without a run id), one sentence each."""
-        notes = []
-        clashing = sorted({f.trainee_key.split("@")[0] for f in self.name_clashes})
-        if clashing:
-            names = sorted({f.trainee.rsplit(" (", 1)[0] for f in self.name_clashes})
-            notes.append(
-                f"name clash: {len(clashing)} name(s) ({', '.join(names)}) typed by "
-                "different trainees in different folders, with different runs; each is "
-                "counted as its own trainee, told apart by the folder"
-            )
-        if self.old_runs_note:
-            notes.append(self.old_runs_note)
-        return notes
-
-    @property
-    def not_counted(self) -> list[FileOutcome]:
-        """The files of this experiment that were not counted, each with its reason."""
-        return [f for f in self.files if f.kind in PROBLEMS]
-
-    @property
-    def unreadable_folders(self) -> list[FileOutcome]:
-        """The trainee folders this account could not read (their runs are unknown)."""
-        return [f for f in self.files if f.kind == "unreadable" and f.file.endswith("/")]
-
-    @property
-    def cannot_read_note(self) -> str:
-        """ "You cannot read N trainee folders ..." when there are any, else ""."""
-        n = len(self.unreadable_folders)
-        if not n:
-            return ""
-        return (
-            f"You cannot read {plural(n, 'trainee folder')} (listed below): their runs are not "
-            "counted. Read the class as root or from an account in the educators' group."
-        )
-
-    @property
-    def other_experiment(self) -> list[FileOutcome]:
-        return [f for f in self.files if f.kind == "other experiment"]
-
-    @property
-    def trainees(self) -> pd.DataFrame:
-        """One row per trainee with a file of this experiment: key, name, counted runs,
-        demos in them, runs not counted and what the trainee still lacks."""
-        conditions = EXPERIMENTS[self.experiment].paper_codes
-        want_runs = EXPERIMENTS[self.experiment].runs
-        mine = [f for f in self.files if f.trainee_key and f.kind != "other experiment"]
-        rows = []
-        for key in sorted({f.trainee_key for f in mine} | set(self.roster)):
-            theirs = [f for f in mine if f.trainee_key == key]
-            counted = [f for f in theirs if f.counted]
-            names = Counter(f.trainee for f in theirs) or Counter([self.roster[key][0]])
-            assigned = self.roster.get(key, ("", ""))[1] if self.experiment == 2 else ""
-            taught = {f.condition for f in counted}
-            if not theirs:
-                missing = "no run file yet"
-            elif assigned and taught and taught != {assigned}:
-                missing = (
-                    f"taught {', '.join(sorted(taught))}, but the class plan assigns {assigned}"
-                )
-            elif self.experiment == 1:
-                done = {f.condition for f in counted}
-                lacking = [c for c in conditions if c not in done]
-                missing = ("still to do: " + ", ".join(lacking)) if lacking else ""
-            else:
-                runs_by_condition = Counter(f.condition for f in counted)
-                if len(runs_by_condition) > 1:
-                    missing = "runs in more than one condition: " + ", ".join(
-                        sorted(runs_by_condition)
-                    )
-                else:
-                    have = {f.run for f in counted}
-                    lacking = [str(r) for r in range(1, want_runs + 1) if r not in have]
-                    missing = ("still to do: run " + ", ".join(lacking)) if lacking else ""
-            rows.append(
-                {
-                    "trainee_key": key,
-                    "trainee": names.most_common(1)[0][0],
-                    "counted_runs": len(counted),
-                    "demos": sum(f.n_demos for f in counted),
-                    "not_counted": len(theirs) - len(counted),
-                    "missing": missing,
-                    "complete": not missing,
-                    "on_plan": key in self.roster,
-                }
-            )
-        return pd.DataFrame(
-            rows,
-            columns=[
-                "trainee_key",
-                "trainee",
-                "counted_runs",
-                "demos",
-                "not_counted",
-                "missing",
-                "complete",
-                "on_plan",
-            ],
-        )
-
-    @property
-    def complete_runs(self) -> pd.DataFrame:
-        """The rows of trainees who did every condition (Exp. 1) or all runs (Exp. 2):
-        the within-subject tests need them whole."""
-        if self.runs.empty:
-            return self.runs
-        table = self.trainees
-        whole = set(table.loc[table.complete, "trainee_key"])
-        return self.runs[self.runs.trainee_key.isin(whole)].reset_index(drop=True)
 
 
 # ---------------------------------------------------------------- finding the files
@@ -546,74 +332,6 @@ def read_class(
     return result
 
 
-def _progress(progress):
-    """``progress`` checked; gives a function of the number of files that makes the
-    progress callback (None for none): a tqdm bar on stderr, or the caller's own."""
-    if not (progress is None or isinstance(progress, bool) or callable(progress)):
-        raise InvalidParameterError(
-            f"progress must be True, False, None or a function of (done, total), got {progress!r}"
-        )
-
-    def make(total: int):
-        if total < 1 or progress is False:
-            return None
-        if callable(progress):
-            return lambda done: progress(done, total)
-        if progress is None and (headless() or not sys.stderr.isatty()):
-            return None
-        from tqdm import tqdm
-
-        tqdm.monitor_interval = 0  # no monitor thread in a process that forks workers
-        return _Bar(tqdm(total=total, desc="Reading the class", unit="file", file=sys.stderr))
-
-    return make
-
-
-class _Bar:
-    """A tqdm bar as a function of the files done so far (closed at the last one)."""
-
-    def __init__(self, bar):
-        self.bar = bar
-
-    def __call__(self, done: int) -> None:
-        self.bar.update(done - self.bar.n)
-        if done >= self.bar.total:
-            self.bar.close()
-
-
-class _Memo:
-    """What :func:`read_class` learnt about each file, kept while the file is unchanged."""
-
-    def __init__(self, cache, run_files: dict, context):
-        self.cache, self.stamps = cache, {}
-        if cache is None:
-            return
-        if cache.get("context") != context:  # another experiment or settings: start over
-            cache.clear()
-            cache["context"] = context
-        for label, run_file in run_files.items():
-            try:  # a run file in a trainee's zip changes with the zip
-                info = os.stat(run_file.path)
-                self.stamps[label] = (info.st_mtime_ns, info.st_size, info.st_ino)
-            except OSError:
-                self.stamps[label] = None
-
-    def _known(self, label: str, step: str):
-        if self.cache is None or self.stamps.get(label) is None:
-            return None
-        hit = self.cache.get((step, label))
-        return hit[1] if hit is not None and hit[0] == self.stamps[label] else None
-
-    def todo(self, labels, step: str) -> list:
-        return [lab for lab in labels if self._known(lab, step) is None]
-
-    def merge(self, labels, step: str, new: dict) -> list:
-        if self.cache is not None:
-            for label, value in new.items():
-                self.cache[(step, label)] = (self.stamps.get(label), value)
-        return [new[lab] if lab in new else self._known(lab, step) for lab in labels]
-
-
 #: the class plan's file names in a class folder (read as the plan, not as runs)
 PLAN_NAMES = ("plan.csv", "plan.json")
 
@@ -627,108 +345,6 @@ def _roster(path: Path, plan, experiment: int) -> dict:
         # the plan assigns Experiment 2's conditions; for Experiment 1 it is a roster
         plan = load_plan(plan, EXPERIMENTS[2].paper_codes, 2)
     return {key: (plan.names[key], plan.table[key][0]) for key in plan.table}
-
-
-class _Pool:
-    """``map`` over worker processes (or here, for one worker), results in order."""
-
-    def __init__(self, workers: int):
-        self.workers, self._pool = workers, None
-
-    def __enter__(self):
-        if self.workers > 1:
-            self._pool = process_pool(self.workers)
-        else:
-            one_blas_thread()
-        return self
-
-    def map(self, fn, items, meanwhile=None, step=None) -> list:
-        """``fn`` of each item; ``meanwhile()`` runs here while the workers work, and
-        ``step(n)`` after each of the n first results."""
-        if self._pool is None or len(items) < 2:
-            results = []
-            for item in items:
-                results.append(fn(item))
-                if step is not None:
-                    step(len(results))
-            if meanwhile is not None:
-                meanwhile()
-            return results
-        chunk = max(1, len(items) // (4 * self.workers))
-        pending = self._pool.map(fn, items, chunksize=chunk)  # submitted at once
-        if meanwhile is not None:
-            meanwhile()
-        results = []
-        for result in pending:
-            results.append(result)
-            if step is not None:
-                step(len(results))
-        return results
-
-    def __exit__(self, *exc):
-        if self._pool is not None:
-            self._pool.shutdown()
-
-
-def _folder(label: str) -> str:
-    return PurePosixPath(label).parent.as_posix()
-
-
-def _best(members):
-    """The copy to count: the finished one, then the one changed last, then the shorter
-    name (NF.json before the NF-2.json the tutor saves beside it)."""
-    return max(members, key=lambda m: (m[1].finished, m[1].latest, -len(m[0].file)))
-
-
-def _duplicates(outcomes) -> tuple[dict[str, tuple[str, str]], set[str]]:
-    """(label -> (the label counted instead, why), trainee keys whose name clashes).
-
-    Files are copies of one run only when they share a run id (old records without one:
-    when they share trainee, condition and run number, as before ids). Two runs with
-    different ids under one name in different folders are two trainees: a name clash.
-    In one folder, the run changed last is counted (the trainee began the run again)."""
-    groups: dict[tuple, list] = {}
-    for outcome, meta, _ in outcomes:
-        if meta is not None and outcome.counted:
-            groups.setdefault(meta.key, []).append((outcome, meta))
-    beaten, clashes = {}, set()
-
-    def keep_one(same: list, why: str):
-        best = _best(same)
-        beaten.update({o.file: (best[0].file, why) for o, _ in same if o is not best[0]})
-        return best
-
-    for key, members in groups.items():
-        copies: dict = {}
-        for m in members:
-            copies.setdefault(m[1].run_id, []).append(m)
-        kept = [
-            keep_one(same, "holds the same run" + (" (the same run id)" if run_id else ""))
-            for run_id, same in copies.items()
-        ]
-        by_folder: dict = {}
-        for m in kept:
-            by_folder.setdefault(_folder(m[0].file), []).append(m)
-        if len(by_folder) > 1:
-            clashes.add(key[0])
-        for same in by_folder.values():
-            keep_one(same, "is a later run of the same condition in the same folder")
-    return beaten, clashes
-
-
-def _apart(outcome: FileOutcome, clashes: set[str]) -> FileOutcome:
-    """A file of a clashing name, keyed by name and folder (a trainee of its own)."""
-    if outcome.trainee_key not in clashes:
-        return outcome
-    folder = _folder(outcome.file)
-    return replace(
-        outcome,
-        trainee_key=f"{outcome.trainee_key}@{folder}",
-        trainee=f"{outcome.trainee} ({folder})",
-        reason=outcome.reason
-        or f"name clash: other trainees typed the name {outcome.trainee!r} too; "
-        f"told apart by their folder ({folder})",
-    )
 
 
 def _score(path: Path, experiment: int, outcomes, settings) -> ClassResult:
