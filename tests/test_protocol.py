@@ -2,7 +2,9 @@
 
 A made-up condition with a made-up feedback policy, added as one registry entry and one
 policy class, is offered by the start form, taught in a run, taught by the simulated
-teachers and simulated in a cohort; nothing else changes.
+teachers, simulated in a cohort and counted, described and compared (with BF) in the
+class analysis, beside the paper's tests, which stay on the paper's conditions;
+nothing else changes.
 """
 
 from __future__ import annotations
@@ -99,6 +101,53 @@ def test_a_made_up_condition_is_one_entry_and_one_policy_class(made_up):
     assert check_conditions(2, ("BF", "XF")) == ("BF", "XF")
     cohort = run_experiment(2, seed=0, n=4, workers=1, progress=False, conditions=("BF", "XF"))
     assert set(cohort.runs.condition) == {"BF", "XF"}
+
+
+def test_a_made_up_condition_is_in_the_class_analysis(made_up, tmp_path):
+    import json
+
+    from tutor.study.class_report import analyse_class, save_class
+    from tutor.study.classroom import read_class
+    from tutor.study.simulated_class import write_simulated_class
+
+    # a class of 6 simulated trainees, 3 in BF and 3 in XF, three runs each
+    write_simulated_class(tmp_path / "class", 2, 6, seed=0, workers=1, conditions=("BF", "XF"))
+    result = read_class(tmp_path / "class", 2, workers=1)
+    assert not result.not_counted
+    xf_files = [f for f in result.files if f.condition == "XF"]
+    assert len(xf_files) == 9 and all(f.counted for f in xf_files)
+    assert result.runs.condition.value_counts().to_dict() == {
+        "XF": 9, "BF": 9, "NF": 0, "RF": 0, "SF": 0, "AF": 0, "HF": 0,
+    }
+    assert list(result.runs.condition.cat.categories) == list(experiment(2).codes)
+
+    analysis = analyse_class(result)
+    table = analysis["descriptive"]
+    assert list(table.index) == ["NF", "RF", "BF", "SF", "XF"]  # the paper's, then XF
+    assert table.loc["XF", ["trainees", "runs"]].tolist() == [3, 9]
+    xf = result.runs[result.runs.condition == "XF"]
+    assert table.loc["XF", "mean eta"] == pytest.approx(xf.eta.mean())
+    assert table.loc["XF", "errors"] == xf.errors.sum()
+
+    # its comparison is with BF, the condition the registry compares it with
+    beyond = analysis["beyond"]
+    assert list(beyond.index) == ["XF"]
+    row = beyond.loc["XF"]
+    assert (row["compared with"], row["trainees"], row["trainees (compared)"]) == ("BF", 3, 3)
+    assert row["test"] == "Welch t" and np.isfinite(row["T"]) and 0 <= row["p"] <= 1
+    bf = result.runs[result.runs.condition == "BF"]
+    assert row["mean eta (compared)"] == pytest.approx(bf.eta.mean())
+
+    # the paper's tables and tests keep to the paper's conditions
+    assert list(analysis["beside"].index) == ["NF", "RF", "BF", "SF"]
+    assert list(analysis["failures"].columns) == ["BF"]
+    assert not analysis["class"]["tested"] and "XF" not in analysis["class"]["why_not"]
+
+    # and the saved results hold it
+    save_class(result, analysis, tmp_path / "out", figures=False)
+    saved = json.loads((tmp_path / "out" / "class.json").read_text())
+    assert saved["descriptive"]["XF"]["runs"] == 9
+    assert saved["beyond"]["XF"]["compared with"] == "BF"
 
 
 def test_the_registry_is_left_as_it_was_after_the_made_up_condition():

@@ -8,6 +8,13 @@
 - Experiment 2: mixed ANOVA (condition between, run within), then Welch t-tests of the
   trainees' mean η, on the trainees who did all three runs; the failure-count table.
 
+The paper's tests run on the paper's conditions only. A condition beyond the paper
+(any the registry, :data:`tutor.framework.protocol.EXPERIMENTS`, lists as not the
+paper's: AF, HF, VA, or one added later) that has counted runs gets its own row of the
+per-condition table and its own comparison with the paper's condition it is compared
+with (:func:`beyond_table`, :func:`tutor.study.stats.compare_two`), never a place in the
+paper's ANOVA.
+
 A class too small for a test (fewer than :data:`MIN_PER_CONDITION` whole trainees in a
 condition) gets descriptive numbers and a plain sentence saying why there is no test.
 
@@ -31,7 +38,7 @@ from ..framework.protocol import EXPERIMENTS
 from ..framework.wording import NOT_A_NUMBER, plural, sentence
 from . import stats
 from .class_result import ClassResult
-from .report import _jsonable, check_out_dir, load_result, test_lines
+from .report import _jsonable, check_out_dir, load_result, pct, test_lines
 from .tables import has_no_number, readable_label, readable_table
 
 __all__ = [
@@ -41,6 +48,8 @@ __all__ = [
     "save_class",
     "same_size_cohort",
     "descriptive_table",
+    "beyond_table",
+    "paper_runs",
 ]
 
 #: the fewest whole trainees per condition for the paper's tests (below it: description only)
@@ -59,6 +68,26 @@ def _counts(runs: pd.DataFrame, experiment: int) -> dict[str, int]:
         return dict.fromkeys(conditions, 0)
     per = runs.groupby("condition", observed=False)["teacher"].nunique()
     return {c: int(per.get(c, 0)) for c in conditions}
+
+
+def paper_runs(runs: pd.DataFrame, experiment: int) -> pd.DataFrame:
+    """The rows of ``runs`` in the paper's conditions, their ``condition`` a categorical
+    of the paper's conditions only (what the paper's tests and figures read)."""
+    conditions = list(EXPERIMENTS[experiment].paper_codes)
+    if "condition" not in runs:
+        return runs
+    mine = runs[runs.condition.astype(str).isin(conditions)].reset_index(drop=True)
+    mine["condition"] = pd.Categorical(
+        mine.condition.astype(str), categories=conditions, ordered=True
+    )
+    return mine
+
+
+def _taught(runs: pd.DataFrame, experiment: int) -> list[str]:
+    """The paper's conditions, then those beyond it that ``runs`` holds, in registry order."""
+    spec = EXPERIMENTS[experiment]
+    held = set(runs.condition.astype(str)) if "condition" in runs else set()
+    return [*spec.paper_codes, *(c for c in spec.extra_codes if c in held)]
 
 
 def too_small(runs: pd.DataFrame, experiment: int) -> str:
@@ -81,8 +110,11 @@ def too_small(runs: pd.DataFrame, experiment: int) -> str:
 
 
 def descriptive_table(runs: pd.DataFrame, experiment: int) -> pd.DataFrame:
-    """Per condition: trainees, runs, η (median, mean), demos, ε, and the failures."""
-    conditions = list(EXPERIMENTS[experiment].paper_codes)
+    """Per condition: trainees, runs, η (median, mean), demos, ε, and the failures.
+
+    A row for each of the paper's conditions, then one for each condition beyond the
+    paper that has counted runs."""
+    conditions = _taught(runs, experiment)
     if runs.empty:
         return pd.DataFrame(index=conditions, columns=["trainees", "runs"]).fillna(0)
     g = runs.groupby("condition", observed=False)
@@ -127,6 +159,32 @@ def same_size_cohort(class_runs: pd.DataFrame, experiment: int, seed: int = 0) -
     return bundled[bundled.teacher.isin(chosen)].reset_index(drop=True)
 
 
+def beyond_table(runs: pd.DataFrame, experiment: int) -> pd.DataFrame:
+    """Each condition beyond the paper that ``runs`` holds, against the paper's condition
+    the registry compares it with (:func:`tutor.study.stats.compare_two`).
+
+    Columns: ``compared with``, ``trainees`` and ``<measure>`` of the condition, the same
+    of the one it is compared with, ``test``, ``T`` and ``p`` (NaN: too few trainees).
+    Empty (no rows) when ``runs`` holds none of them.
+    """
+    spec = EXPERIMENTS[experiment]
+    measure = "median eta" if experiment == 1 else "mean eta"
+    columns = ["compared with", "trainees", measure, "trainees (compared)",
+               f"{measure} (compared)", "test", "T", "p"]
+    rows = {}
+    for code in _taught(runs, experiment)[len(spec.paper_codes):]:
+        other = spec.condition(code).compared_with
+        mine, theirs = (runs[runs.condition.astype(str) == c] for c in (code, other))
+        pick = "median" if experiment == 1 else "mean"
+        test = stats.compare_two(runs, code, other, experiment)
+        rows[code] = [
+            other, mine.teacher.nunique(), getattr(mine.eta, pick)(), theirs.teacher.nunique(),
+            getattr(theirs.eta, pick)() if len(theirs) else np.nan, test["test"], test["T"],
+            test["p"],
+        ]
+    return pd.DataFrame.from_dict(rows, orient="index", columns=columns)
+
+
 def _tests(runs: pd.DataFrame, experiment: int) -> dict:
     """The paper's statistics on whole trainees' runs, or why there are none."""
     why = too_small(runs, experiment)
@@ -158,16 +216,20 @@ def analyse_class(result: ClassResult, seed: int = 0) -> dict:
         runs), ``class`` (tests on whole trainees: ``tested``, ``why_not``, ``stats``,
         ``relative``, ``conclusions``), ``simulated`` (the same for the same-size
         simulated cohort, with its ``runs``), ``beside`` (class, paper and simulated η per
-        condition).
+        condition), ``beyond`` (each condition beyond the paper against the one it is
+        compared with, on whole trainees: :func:`beyond_table`). The tests, the failure
+        table and ``beside`` are on the paper's conditions only.
     """
     exp = result.experiment
-    whole = result.complete_runs
+    whole = paper_runs(result.complete_runs, exp)  # the paper's tests: its conditions only
     simulated_runs = same_size_cohort(whole, exp, seed)
+    paper_part = paper_runs(result.runs, exp)
     out = {
         "descriptive": descriptive_table(result.runs, exp),
-        "failures": stats.failure_table(result.runs) if not result.runs.empty else None,
+        "failures": stats.failure_table(paper_part) if not paper_part.empty else None,
         "class": _tests(whole, exp),
         "simulated": {**_tests(simulated_runs, exp), "runs": simulated_runs},
+        "beyond": beyond_table(result.complete_runs, exp),
     }
     conditions = list(EXPERIMENTS[exp].paper_codes)
     measure = "median eta" if exp == 1 else "mean eta"
@@ -203,6 +265,26 @@ def _test_lines(tests: dict, experiment: int, who: str) -> list[str]:
     return lines
 
 
+def beyond_lines(beyond: pd.DataFrame) -> list[str]:
+    """The conditions beyond the paper, each against the one it is compared with, one
+    line each (none when the class has no run beyond the paper)."""
+    lines = []
+    for code, row in beyond.iterrows():
+        measure = readable_label(beyond.columns[2])
+        other = row["compared with"]
+        said = (
+            f"{row['test']} = {row['T']:.2f}, p = {row['p']:.3g}"
+            if np.isfinite(row["p"])
+            else "no test (it needs 2 whole trainees a side, with some spread)"
+        )
+        lines.append(
+            f"Beyond the paper, {code} against {other}: {said}; {measure} "
+            f"{pct(row.iloc[2])} ({plural(int(row['trainees']), 'whole trainee')}) against "
+            f"{pct(row.iloc[4])} ({plural(int(row['trainees (compared)']), 'whole trainee')})"
+        )
+    return lines
+
+
 def format_class_report(result: ClassResult, analysis: dict) -> str:
     """Plain-text report of a class: what was counted, the numbers, the files left out."""
     exp = result.experiment
@@ -235,6 +317,7 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
         lines.append("")
         lines += _test_lines(analysis["class"], exp, "This class")
         lines += _test_lines(analysis["simulated"], exp, "Simulated, same size")
+        lines += beyond_lines(analysis["beyond"])
         if exp == 2 and analysis["failures"] is not None:
             fail = analysis["failures"]
             ref = pd.DataFrame(paper.EXPERIMENT_2["failures"]).T[fail.columns]
@@ -302,16 +385,19 @@ def _class_json(result: ClassResult, analysis: dict) -> dict:
         "beside": _jsonable(analysis["beside"]),
         "descriptive": _jsonable(analysis["descriptive"]),
         "failures": None if analysis["failures"] is None else _jsonable(analysis["failures"]),
+        "beyond": _jsonable(analysis["beyond"]),
         **_jsonable(tests),
     }
 
 
 def class_figure(result: ClassResult, analysis: dict):
-    """The paper-style figure of the class, the simulated same-size medians/means marked."""
+    """The paper-style figure of the class (the paper's conditions), the simulated
+    same-size medians/means marked."""
     from .figures import experiment1_figure, experiment2_figure
 
     draw = experiment1_figure if result.experiment == 1 else experiment2_figure
-    return draw(result.runs, who="trainees", reference=analysis["simulated"]["runs"])
+    runs = paper_runs(result.runs, result.experiment)  # beside the paper's: its conditions
+    return draw(runs, who="trainees", reference=analysis["simulated"]["runs"])
 
 
 #: what a spreadsheet reads as the start of a formula (OWASP, CSV injection)
@@ -371,7 +457,7 @@ def save_class(result: ClassResult, analysis: dict, out, figures: bool = True) -
         text = json.dumps(_class_json(result, analysis), indent=2, default=str)
         Path(paths["summary"]).write_text(text, encoding="utf-8")
         paths["report"].write_text(format_class_report(result, analysis) + "\n", "utf-8")
-        if figures and not result.runs.empty:
+        if figures and not paper_runs(result.runs, result.experiment).empty:
             import matplotlib.pyplot as plt
 
             fig = class_figure(result, analysis)

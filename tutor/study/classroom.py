@@ -17,9 +17,11 @@ allowed to stop the others:
 - it is a practice run, or its current attempt is not finished;
 - it repeats a run another file already holds (the finished, latest one is counted).
 
-Files of the other experiment are set aside (``other_experiment``), not reported as
-problems; hidden files (``.NF.lock``, temporary files) and files that are neither
-``.json`` nor ``.zip`` are not looked at. A class of more than
+A run may be in any condition the experiment's registry entry lists
+(:data:`tutor.framework.protocol.EXPERIMENTS`): the paper's and those beyond it (the
+``condition`` column orders them so). Files of the other experiment are set aside
+(``other_experiment``), not reported as problems; hidden files (``.NF.lock``, temporary
+files) and files that are neither ``.json`` nor ``.zip`` are not looked at. A class of more than
 :data:`~tutor.limits.MAX_CLASS_FILES` run files is refused as a whole (LimitError).
 
 Every counted run is replayed through the same learner and scored by the same
@@ -176,13 +178,14 @@ def _check(label: str, read, experiment: int, again: str = ""):
         reason = f"an Experiment {record.experiment} run: read it with --experiment "
         return FileOutcome(label, "other experiment", reason + str(record.experiment), **info), None
     spec = EXPERIMENTS[experiment]
-    if record.condition not in spec.paper_codes or record.task != spec.task:
+    if record.condition not in spec.codes or record.task != spec.task:
+        beyond = f"; beyond the paper: {', '.join(spec.extra_codes)}" if spec.extra_codes else ""
         return (
             FileOutcome(
                 label,
                 "not a run record",
                 f"its task {record.task!r} and condition {record.condition!r} are not "
-                f"Experiment {experiment}'s ({spec.task}: {', '.join(spec.paper_codes)})",
+                f"Experiment {experiment}'s ({spec.task}: {', '.join(spec.paper_codes)}{beyond})",
                 **info,
             ),
             None,
@@ -369,7 +372,7 @@ def _score(path: Path, experiment: int, outcomes, settings) -> ClassResult:
                 rows.append({"teacher": 0, **who, "file": outcome.file, **row})
                 demo_rows += [{"teacher": 0, **who, **d} for d in extra]
         files.append(outcome)
-    order = list(EXPERIMENTS[experiment].paper_codes)
+    order = list(EXPERIMENTS[experiment].codes)  # the paper's first, then those beyond
     runs, demos = pd.DataFrame(rows), pd.DataFrame(demo_rows)
     for frame in (runs, demos):
         if frame.empty:

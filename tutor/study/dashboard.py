@@ -7,7 +7,8 @@ shows, beside the paper's numbers and a simulated class of the same size
 
 - how many trainees and runs are counted, and when it was last refreshed;
 - the class's η per condition beside the paper's and the simulation's, and the figure;
-- the paper's tests on the class (or why the class is too small for them);
+- the paper's tests on the class (or why the class is too small for them), and each
+  condition beyond the paper against the one it is compared with;
 - the trainees still to finish (or on the class plan without any run yet);
 - every file not counted, with the reason.
 
@@ -46,7 +47,15 @@ from ..fileio import check_path_length
 from ..framework.wording import percent, plural
 from ..payloads import check_choice, check_text, safely
 from ..runtime import headless, sessions_root
-from .class_report import BESIDE_LEGEND, analyse_class, as_sentence, class_figure, save_class
+from .class_report import (
+    BESIDE_LEGEND,
+    analyse_class,
+    as_sentence,
+    beyond_lines,
+    class_figure,
+    paper_runs,
+    save_class,
+)
 from .classroom import read_class
 from .report import OUT_ROOM
 from .tables import has_no_number, readable_label, readable_table
@@ -322,6 +331,10 @@ class ClassDashboard:
             self.beside.value = "<p>No finished run of this experiment yet.</p>"
             self.figure.layout.display = "none"
             self.figure_caption.value = ""
+        elif paper_runs(result.runs, result.experiment).empty:  # runs beyond the paper only
+            self.beside.value = _table(analysis["beside"], BESIDE_LEGEND)
+            self.figure.layout.display = "none"
+            self.figure_caption.value = ""
         else:
             self.beside.value = _table(analysis["beside"], BESIDE_LEGEND)
             fig = class_figure(result, analysis)
@@ -386,6 +399,8 @@ class ClassDashboard:
         parts = []
         for who, label in (("class", "This class"), ("simulated", "Simulated, same size")):
             lines = _test_lines(self.analysis[who], self.result.experiment, label)
+            if who == "class":  # the conditions beyond the paper, each against its own
+                lines += beyond_lines(self.analysis["beyond"])
             parts.append(  # lines kept as they are, wrapped between words (no <pre>)
                 f'<div class="lfd-class-lines" style="white-space:pre-wrap;{WRAP_WORDS};'
                 'font-family:var(--jp-code-font-family, monospace)">'

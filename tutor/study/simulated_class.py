@@ -30,7 +30,7 @@ from ..fileio import write_json
 from ..framework.protocol import run_file_name
 from ..framework.record import Trainee
 from ..workers import one_blas_thread, process_pool
-from .cohort import StudySettings, check_request, teach_runs
+from .cohort import StudySettings, check_conditions, check_request, teach_runs
 
 __all__ = ["write_simulated_class", "trainee_name", "DAMAGES"]
 
@@ -76,10 +76,12 @@ def trainee_name(i: int) -> str:
 
 
 def _teacher_records(item):
-    experiment, teacher, seed, n = item
+    experiment, teacher, seed, n, conditions = item
     trainee = Trainee.from_name(trainee_name(teacher))
     records = []
-    for _, number, run in teach_runs(experiment, teacher, seed, n, settings=StudySettings()):
+    settings = StudySettings()
+    taught = teach_runs(experiment, teacher, seed, n, settings=settings, conditions=conditions)
+    for _, number, run in taught:
         records.append(replace(run.record, trainee=trainee, run=number).to_dict())
     return trainee, records
 
@@ -92,6 +94,7 @@ def write_simulated_class(
     workers: int | None = None,
     unfinished: int = 0,
     damaged: int = 0,
+    conditions=None,
 ) -> dict[str, list[Path]]:
     """Write every run of ``n`` simulated trainees under ``folder``.
 
@@ -108,6 +111,10 @@ def write_simulated_class(
     unfinished, damaged : int
         How many trainees' last run is left unfinished, or spoiled (see the module);
         different trainees, counted from the last.
+    conditions : sequence of str, optional
+        The conditions taught (default the paper's), any the experiment's registry entry
+        lists (:func:`tutor.study.cohort.check_conditions`): Experiment 2's teachers are
+        split evenly over them, as in a simulated cohort.
 
     Returns
     -------
@@ -122,7 +129,8 @@ def write_simulated_class(
     SaveError
         A file cannot be written.
     """
-    experiment, n, seed = check_request(experiment, n, seed)
+    experiment, n, seed = check_request(experiment, n, seed, conditions)
+    conditions = check_conditions(experiment, conditions)
     for name, value in (("unfinished", unfinished), ("damaged", damaged)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 0:
             raise InvalidParameterError(f"{name} must be a whole number >= 0, got {value!r}")
@@ -131,7 +139,7 @@ def write_simulated_class(
             f"unfinished + damaged ({unfinished} + {damaged}) is more than the {n} trainees"
         )
     folder = Path(folder)
-    items = [(experiment, i, seed, n) for i in range(n)]
+    items = [(experiment, i, seed, n, conditions) for i in range(n)]
     workers = min(os.cpu_count() or 1, n) if workers is None else workers
     if workers > 1:
         with process_pool(workers) as pool:

@@ -29,6 +29,7 @@ __all__ = [
     "experiment2_ranking",
     "summary_table",
     "describe",
+    "compare_two",
 ]
 
 ALPHA = 0.05
@@ -300,3 +301,39 @@ def summary_table(runs: pd.DataFrame, experiment: int, stats: dict | None = None
         },
         index=conds,
     )
+
+
+def compare_two(runs: pd.DataFrame, a: str, b: str, experiment: int) -> dict:
+    """Condition ``a`` against ``b`` alone, as the paper's pairwise tests compare two.
+
+    Experiment 1 (within subjects): a paired t-test of η on the teachers who taught
+    both; Experiment 2 (between subjects): a Welch t-test of the teachers' mean η. A
+    condition beyond the paper is judged this way against the paper's condition it is
+    compared with, never inside the paper's ANOVA.
+
+    Returns
+    -------
+    dict
+        ``test`` ("paired t" or "Welch t"), ``n_a`` and ``n_b`` (teachers in the test),
+        ``T`` and ``p`` (NaN when there are too few teachers, fewer than 2 a side, or
+        no spread to test).
+    """
+    data = _clean(runs)
+    data = data[data.condition.isin([a, b])]
+    out = {"test": "paired t" if experiment == 1 else "Welch t", "T": np.nan, "p": np.nan}
+    if experiment == 1:
+        wide = data.pivot_table(index="teacher", columns="condition", values="eta")
+        wide = wide.reindex(columns=[a, b]).dropna()
+        x, y = wide[a].to_numpy(float), wide[b].to_numpy(float)
+    else:
+        means = data.groupby(["teacher", "condition"])["eta"].mean().reset_index()
+        x = means.loc[means.condition == a, "eta"].to_numpy(float)
+        y = means.loc[means.condition == b, "eta"].to_numpy(float)
+    out.update(n_a=len(x), n_b=len(y))
+    if min(len(x), len(y)) < 2 or np.ptp(x - y if experiment == 1 else np.r_[x, y]) == 0:
+        return out
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = _pg().ttest(x, y, paired=experiment == 1, correction=experiment != 1)
+    out.update(T=float(res["T"].iloc[0]), p=float(res[_col(res, "p_val", "p-val")].iloc[0]))
+    return out
