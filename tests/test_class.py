@@ -238,3 +238,22 @@ def test_a_refresh_reads_only_the_files_that_changed(tmp_path, monkeypatch):
     assert seen == [label, label]  # read and replayed once, alone
     assert [f.kind for f in third.files if f.file == label] == ["unfinished"]
     assert len(third.runs) == len(first.runs) - 1
+
+
+def test_a_condition_beyond_the_paper_is_compared_with_its_own_not_tested_with_the_paper(
+    tmp_path,
+):
+    """VA (Experiment 1, beyond the paper) runs are counted and described; the paper's
+    repeated-measures ANOVA stays on NF, VF and VR, and VA is compared with VF alone."""
+    write_simulated_class(tmp_path, 1, 4, seed=0, workers=1, conditions=("NF", "VF", "VR", "VA"))
+    result = read_class(tmp_path, 1, workers=1)
+    assert (result.runs.condition == "VA").sum() == 4 and result.trainees.complete.all()
+    analysis = analyse_class(result)
+    assert list(analysis["descriptive"].index) == ["NF", "VF", "VR", "VA"]
+    assert analysis["class"]["tested"]
+    assert analysis["class"]["stats"]["anova"]["ddof1"] == 2  # three conditions, not four
+    assert set(analysis["class"]["stats"]["medians"]) == {"NF", "VF", "VR"}
+    row = analysis["beyond"].loc["VA"]
+    assert (row["compared with"], row["test"], row["trainees"]) == ("VF", "paired t", 4)
+    va = result.runs[result.runs.condition == "VA"]
+    assert row["median eta"] == pytest.approx(va.eta.median())
