@@ -370,6 +370,8 @@ class TeachingRun:
         given = check_given(given)
         kept = None if recording is None else round_recording(_recording(recording))
         record = self.session.add_demo(raw, shown=shown, condition=condition)
+        if followed_rule is None:
+            followed_rule = self._rule_followed(self.session._demos[-1])
         if self.policy.adaptive:
             shown = record.shown  # the selector's picks, kept so that a replay shows them
         demo = Demo(
@@ -386,6 +388,11 @@ class TeachingRun:
         attempt = replace(self.attempt, demos=(*self.attempt.demos, demo))
         self._record = self._record.with_current(attempt, self._event("add", attempt.n_demos))
         return record
+
+    def _rule_followed(self, demo) -> bool | None:
+        """Whether ``demo`` (preprocessed, just added) followed the rule in force when it
+        was given; None where the condition has no rule (a run with rules overrides it)."""
+        return None
 
     def add_demos(self, items, detail: str = "") -> int:
         """Add several demos all or nothing (a Load); returns how many were added.

@@ -33,8 +33,14 @@ class MazeRun(TeachingRun):
     experiment = 1
 
     def advice(self) -> RuleAdvice:
-        """VR: the rule that applies to the next demo."""
-        return advise(self.task, self.session)
+        """VR: the rule that applies to the next demo (worked out once per step: the
+        stroke's check, the picture's circle and the panel's words all read it)."""
+        cached = getattr(self, "_advice", None)
+        if cached is not None and cached[0] is self.session and cached[1] is self.session.latest:
+            return cached[2]
+        advice = advise(self.task, self.session)
+        self._advice = (self.session, self.session.latest, advice)
+        return advice
 
     def add_demo(self, raw, **options) -> FeedbackRecord:
         """Add a demo; in VR its compliance with the rule in force is recorded.
@@ -43,11 +49,16 @@ class MazeRun(TeachingRun):
         maze demo is a stroke drawn on the sketchpad.
         """
         options.setdefault("given", "drawn")
-        if self.protocol_condition.rules and options.get("followed_rule") is None:
-            rule = self.advice()
-            start = self.task.condition_of(self.task.preprocess(raw))
-            options["followed_rule"] = followed(rule, start)
-        return super().add_demo(raw, **options)
+        rules = self.protocol_condition.rules and options.get("followed_rule") is None
+        self._rule_in_force = self.advice() if rules else None
+        try:
+            return super().add_demo(raw, **options)
+        finally:
+            self._rule_in_force = None
+
+    def _rule_followed(self, demo) -> bool | None:
+        rule = getattr(self, "_rule_in_force", None)
+        return None if rule is None else followed(rule, self.task.condition_of(demo))
 
     @property
     def compliance(self) -> list[bool]:
