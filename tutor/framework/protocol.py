@@ -72,6 +72,9 @@ class Condition:
         The tutor names the plant (or start) the robot would learn most from next.
     rules : bool
         The tutor gives the paper's rule for where the next demonstration starts (VR).
+    instruction : str
+        What the trainee is told to do in it, in a few plain sentences (the worked
+        example and the start of a run show it).
     example : str
         The worked example's caption of what the trainee sees after a demo ("{plant}":
         the plant the example demonstrates next).
@@ -88,6 +91,7 @@ class Condition:
     selector: tuple[str, int] | None = None
     hinted: bool = False
     rules: bool = False
+    instruction: str = ""
     example: str = ""
     compared_with: str | None = None
     compared_why: str = ""
@@ -157,6 +161,16 @@ class Experiment:
         return tuple(c.code for c in self.conditions if c.paper)
 
     @property
+    def without_feedback(self) -> str:
+        """The paper's condition in which the teacher sees nothing while teaching (NF)."""
+        return next(c.code for c in self.conditions if c.paper and c.policy.silent)
+
+    @property
+    def with_feedback(self) -> tuple[str, ...]:
+        """The paper's conditions in which the teacher sees the robot's attempts."""
+        return tuple(c.code for c in self.conditions if c.paper and not c.policy.silent)
+
+    @property
     def extra_codes(self) -> tuple[str, ...]:
         """The conditions beyond the paper."""
         return tuple(c.code for c in self.conditions if not c.paper)
@@ -220,12 +234,51 @@ _MAZE_TIPS = {
     "VF": "VF: you see every attempt of the robot after each demonstration",
     "VR": "VR: every attempt, and the rule to follow for the next demonstration",
 }
+_MAZE_INSTRUCTIONS = {
+    "NF": (
+        "No feedback. Draw a path from the shaded start zone to the purple target. "
+        "You will not see what the robot learned until you press Finish, so decide "
+        "yourself where your next demonstration should start."
+    ),
+    "VF": (
+        "Visual feedback. After each demonstration the robot tries the maze from 140 "
+        "start points: solid green lines succeed, dashed dark red ones fail. Start "
+        "your next demonstration where the lines fail."
+    ),
+    "VR": (
+        "Visual feedback and rules. You see the same lines, and a dashed circle marks"
+        " where the paper's rules say your next demonstration should start. Start "
+        "inside the circle."
+    ),
+}
 _PICKPLACE_POLICIES = {"NF": "none", "RF": "replay", "BF": "batch", "SF": "selected"}
 _PICKPLACE_EXAMPLES = {
     "NF": "2. You see nothing more",
     "RF": "2. The robot tries that plant",
     "BF": "2. The robot tries five plants",
     "SF": "2. You see the plants you test",
+}
+_PICKPLACE_INSTRUCTIONS = {
+    "NF": (
+        "No feedback. Pick a plant on the tray map and demonstrate to it. You will "
+        "not see what the robot learned until you finish the run, so choose the "
+        "plants yourself."
+    ),
+    "RF": (
+        "Replay. After each demonstration the robot tries the plant you just showed "
+        "it: green if it succeeds, dark red if it fails. It costs 25 s of your 15 "
+        "minutes."
+    ),
+    "BF": (
+        "Batch. After each demonstration the robot tries five plants, the four "
+        "corners and the centre: green succeeds, dark red fails. It costs 125 s of "
+        "your 15 minutes."
+    ),
+    "SF": (
+        "You choose the tests. After a demonstration, select a plant and press Test "
+        "plant to see whether the robot can pick it (25 s each). You see only the "
+        "plants you ask for."
+    ),
 }
 _PICKPLACE_TIPS = {
     "NF": "NF: no feedback while teaching",
@@ -241,7 +294,13 @@ register(
         title="maze",
         conditions=(
             *(
-                Condition(c, _policy(_MAZE_POLICIES[c]), tip=_MAZE_TIPS[c], rules=c == "VR")
+                Condition(
+                    c,
+                    _policy(_MAZE_POLICIES[c]),
+                    tip=_MAZE_TIPS[c],
+                    rules=c == "VR",
+                    instruction=_MAZE_INSTRUCTIONS[c],
+                )
                 for c in MAZE_CONDITIONS
             ),
             Condition(
@@ -250,6 +309,12 @@ register(
                 paper=False,
                 tip="VA (beyond the paper): the robot shows the five attempts it picks itself",
                 selector=("disagreement", 5),
+                instruction=(
+                    "Adaptive visual feedback (beyond the paper). After each demonstration "
+                    "the robot shows the five attempts it is least sure of, out of 140 start "
+                    "points: solid green lines succeed, dashed dark red ones fail. Start your "
+                    "next demonstration where the lines fail."
+                ),
                 compared_with="VF",
                 compared_why="shows the robot's attempts after every demonstration too",
             ),
@@ -276,6 +341,7 @@ register(
                     c,
                     _policy(_PICKPLACE_POLICIES[c]),
                     tip=_PICKPLACE_TIPS[c],
+                    instruction=_PICKPLACE_INSTRUCTIONS[c],
                     example=_PICKPLACE_EXAMPLES[c],
                 )
                 for c in PICKPLACE_CONDITIONS
@@ -286,6 +352,12 @@ register(
                 paper=False,
                 tip="AF (beyond the paper): the robot tries the five plants it picks itself",
                 selector=("disagreement", 5),  # k = 5 plants: BF's cost
+                instruction=(
+                    "Adaptive (beyond the paper). After each demonstration the robot tries "
+                    "the five plants it picks itself, where it is least sure of what it "
+                    "learnt: green succeeds, dark red fails. It costs 125 s of your 15 "
+                    "minutes, like BF."
+                ),
                 example="2. The robot tries five plants it picks",
                 compared_with="BF",
                 compared_why="costs the same",
@@ -296,6 +368,12 @@ register(
                 paper=False,
                 tip="HF (beyond the paper): no feedback, but a hint of where to demonstrate next",
                 hinted=True,
+                instruction=(
+                    "Hint (beyond the paper). As in NF you see nothing while teaching, but "
+                    "before each demonstration the tutor names the plant the robot would "
+                    "learn most from next, marked ★ on the tray map. Follow it or choose "
+                    "yourself; it costs no time."
+                ),
                 example="2. The hint: {plant} ★",
                 compared_with="NF",
                 compared_why="shows nothing either, only without the hint",

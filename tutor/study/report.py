@@ -13,6 +13,7 @@ import pandas as pd
 from .. import paper
 from ..errors import InvalidFileError, InvalidParameterError, SaveError
 from ..fileio import check_path_length
+from ..framework import protocol
 from ..framework.protocol import EXPERIMENTS
 from ..framework.wording import percent
 from ..resources import asset
@@ -191,9 +192,10 @@ def format_report(result: CohortResult, analysis: dict) -> str:
             + ", ".join(f"{k} {pct(rel[k])} (paper {pct(prel[k])})" for k in rel)
             + "; the paper rounds to 'about 180 %'"
         )
-        good = int((result.runs.query("condition == 'NF'").reached_target).sum())
+        nf = protocol.experiment(exp).without_feedback
+        good = int(result.runs.reached_target[result.runs.condition == nf].sum())
         well, of = paper.EXPERIMENT_1["did_well_without_feedback"], paper.EXPERIMENT_1["n"]
-        lines.append(f"NF teachers reaching 90 %: {good} of {n} (paper: {well} of {of} did well)")
+        lines.append(f"{nf} teachers reaching 90 %: {good} of {n} (paper: {well} of {of} did well)")
     else:
         rel, prel = analysis["relative"], paper.EXPERIMENT_2["relative"]
         lines.append(

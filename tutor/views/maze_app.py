@@ -261,12 +261,14 @@ def compare_runs(tutors) -> str:
     text = "\n".join(rows)
     if eta:
         text += "\n" + optimal_sentence(tutors[0].task)
-    if {"NF", "VF", "VR"} <= eta.keys():
-        feedback_best = max(eta["VF"], eta["VR"])
-        if eta["NF"] < feedback_best:
+    exp = MazeRun.protocol()
+    nf, with_feedback = exp.without_feedback, exp.with_feedback
+    if {nf, *with_feedback} <= eta.keys():
+        feedback_best = max(eta[c] for c in with_feedback)
+        if eta[nf] < feedback_best:
             text += (
                 "\n\nAs in the paper, you taught more efficiently when you could see what the "
-                f"robot had learned ({feedback_best / max(eta['NF'], 1e-9):.1f} times your NF "
+                f"robot had learned ({feedback_best / max(eta[nf], 1e-9):.1f} times your {nf} "
                 "efficiency; the paper's median trainee gained about 1.8 times)."
             )
         else:

@@ -25,12 +25,11 @@ import io
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..framework import Trainee
+from ..framework import Trainee, protocol
 from .hand import HANDS, check_hand, controls_html
 from .style import AMBIGUOUS, DEMO, FAIL, PASS, UNKNOWN
 
 __all__ = [
-    "INSTRUCTIONS",
     "instruction_text",
     "example_png",
     "instruction_widget",
@@ -47,53 +46,6 @@ PRACTICE_CONTROLS = (
     "controls feel easy."
 )
 
-#: the words of each condition's instruction, (experiment, condition) -> text
-INSTRUCTIONS = {
-    (1, "NF"): (
-        "No feedback. Draw a path from the shaded start zone to the purple target. "
-        "You will not see what the robot learned until you press Finish, so decide "
-        "yourself where your next demonstration should start."
-    ),
-    (1, "VF"): (
-        "Visual feedback. After each demonstration the robot tries the maze from 140 "
-        "start points: solid green lines succeed, dashed dark red ones fail. Start your next "
-        "demonstration where the lines fail."
-    ),
-    (1, "VR"): (
-        "Visual feedback and rules. You see the same lines, and a dashed circle marks "
-        "where the paper's rules say your next demonstration should start. Start inside "
-        "the circle."
-    ),
-    (2, "NF"): (
-        "No feedback. Pick a plant on the tray map and demonstrate to it. You will not "
-        "see what the robot learned until you finish the run, so choose the plants "
-        "yourself."
-    ),
-    (2, "RF"): (
-        "Replay. After each demonstration the robot tries the plant you just showed it: "
-        "green if it succeeds, dark red if it fails. It costs 25 s of your 15 minutes."
-    ),
-    (2, "BF"): (
-        "Batch. After each demonstration the robot tries five plants, the four corners "
-        "and the centre: green succeeds, dark red fails. It costs 125 s of your 15 minutes."
-    ),
-    (2, "SF"): (
-        "You choose the tests. After a demonstration, select a plant and press Test "
-        "plant to see whether the robot can pick it (25 s each). You see only the plants "
-        "you ask for."
-    ),
-    (2, "AF"): (
-        "Adaptive (beyond the paper). After each demonstration the robot tries the five "
-        "plants it picks itself, where it is least sure of what it learnt: green "
-        "succeeds, dark red fails. It costs 125 s of your 15 minutes, like BF."
-    ),
-    (2, "HF"): (
-        "Hint (beyond the paper). As in NF you see nothing while teaching, but before "
-        "each demonstration the tutor names the plant the robot would learn most from "
-        "next, marked ★ on the tray map. Follow it or choose yourself; it costs no time."
-    ),
-}
-
 #: the plants the pick-and-place example demonstrates, and the ones SF asks to test
 _EXAMPLE_PLANTS = (44, 0)
 _SF_TESTS = (99, 9)
@@ -101,14 +53,13 @@ _SF_TESTS = (99, 9)
 
 def instruction_text(experiment: int, condition: str) -> str:
     """The instruction of ``condition`` in ``experiment`` (1 maze, 2 pick-and-place)."""
-    try:
-        return INSTRUCTIONS[(experiment, condition)]
-    except (KeyError, TypeError):
-        known = ", ".join(c for e, c in INSTRUCTIONS if e == experiment) or "none"
+    words = protocol.experiment(experiment).condition(condition).instruction
+    if not words:
         raise InvalidParameterError(
-            f"there is no instruction for condition {condition!r} of experiment "
-            f"{experiment!r}; experiment 1 or 2, with its conditions ({known})"
-        ) from None
+            f"condition {condition!r} of experiment {experiment} has no instruction: give "
+            "its Condition an instruction= in tutor/framework/protocol.py"
+        )
+    return words
 
 
 @functools.cache
