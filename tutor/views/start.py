@@ -80,8 +80,10 @@ TYPE_A_NAME = (
     "Type your name first, then press Start: your runs are saved under it (a blank name "
     "is not used, so that your runs never mix with those of others who left it blank)."
 )
-#: headless runs: the bundled demonstration set fed to each maze phase
-MAZE_AUTOPLAY = {"NF": "maze_undemonstrated", "VF": "maze_good", "VR": "maze_good"}
+#: headless runs: the bundled demonstration set fed to a maze phase, by whether its
+#: condition shows the robot's attempts (a teacher who sees nothing leaves states
+#: undemonstrated; one who sees them fills the gaps)
+MAZE_AUTOPLAY = {"silent": "maze_undemonstrated", "shown": "maze_good"}
 
 class StartForm:
     """Name, condition, practice and Start; then the experiment's runs one after another.
@@ -433,7 +435,8 @@ class MazeExperiment(StartForm):
     def autoplay_one(self, tutor) -> None:
         from ..demofiles import bundled_demos
 
-        tutor.autoplay(bundled_demos(MAZE_AUTOPLAY[tutor.condition]))
+        silent = tutor.run.protocol_condition.policy.silent
+        tutor.autoplay(bundled_demos(MAZE_AUTOPLAY["silent" if silent else "shown"]))
 
     def show_results(self) -> None:
         import matplotlib.pyplot as plt
