@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tutor import paper
 from tutor.errors import InvalidParameterError
-from tutor.study import paper
 from tutor.study.replication import (
     CONCLUSIONS,
     chance_of_at_least,

@@ -21,8 +21,8 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import PercentFormatter
 
+from .. import paper
 from ..framework.wording import percent
-from . import paper
 
 __all__ = [
     "experiment1_figure",

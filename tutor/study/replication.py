@@ -30,9 +30,9 @@ import numpy as np
 import pandas as pd
 from scipy.stats import binom
 
+from .. import paper
 from ..errors import InvalidParameterError
 from ..framework.protocol import EXPERIMENTS
-from . import paper
 from .stats import experiment2_ranking
 
 __all__ = ["teacher_totals", "replication_rates", "chance_of_at_least"]

@@ -17,8 +17,8 @@ import warnings
 import numpy as np
 import pandas as pd
 
+from .. import paper
 from ..paper import PICKPLACE_BEST, PICKPLACE_CONDITIONS
-from . import paper
 
 __all__ = [
     "experiment1_stats",
