@@ -158,11 +158,6 @@ def teachers(tmp_path):
     child.close()
 
 
-@pytest.fixture(scope="module")
-def task():
-    return MazeTask()
-
-
 def _check_after_kill(path: Path, task, resumed: int, last_saved: int | None, seed: int) -> int:
     """The file after a kill: absent only if nothing was saved, else whole and holding
     every announced demo (and at most the one in flight). Returns its demo count."""
@@ -178,7 +173,7 @@ def _check_after_kill(path: Path, task, resumed: int, last_saved: int | None, se
     return held
 
 
-def test_random_kills_lose_nothing(teachers, tmp_path, task):
+def test_random_kills_lose_nothing(teachers, tmp_path, maze_task):
     rng = random.Random(teachers.seed)
     kills = _kill_count()
     held = {}
@@ -192,25 +187,25 @@ def test_random_kills_lose_nothing(teachers, tmp_path, task):
         delay = rng.uniform(*DELAY_RANGE)
         time.sleep(delay)
         last = teachers.kill(pid, None, f"a kill {delay:.3f} s after resuming")
-        held[path] = _check_after_kill(path, task, resumed, last, teachers.seed)
+        held[path] = _check_after_kill(path, maze_task, resumed, last, teachers.seed)
     # the last file once more, by a teacher that resumes and saves on top
     path = tmp_path / f"run{(kills - 1) // KILLS_PER_FILE}.json"
     pid, resumed = teachers.teach(path)
     assert resumed == held[path]
     last = teachers.kill(pid, lambda w: w[1] == "saved", "one more save")
-    assert _check_after_kill(path, task, resumed, last, teachers.seed) > held[path]
+    assert _check_after_kill(path, maze_task, resumed, last, teachers.seed) > held[path]
     # a kill mid-save may leave its temporary file; a finished save leaves none
     assert len(_temp_files(tmp_path)) <= kills + 1
 
 
-def test_kills_inside_fsync_and_replace_lose_nothing(teachers, tmp_path, task):
+def test_kills_inside_fsync_and_replace_lose_nothing(teachers, tmp_path, maze_task):
     path = tmp_path / "run.json"
     held = 0
     for name, call_number in HANG_KILLS:
         pid, resumed = teachers.teach(path, (name, call_number))
         assert resumed == held, f"resumed {resumed} demos from a file holding {held}"
         last = teachers.kill(pid, lambda w, n=name: w[1:] == ["in", n], f"the hang in {name}")
-        held = _check_after_kill(path, task, resumed, last, teachers.seed)
+        held = _check_after_kill(path, maze_task, resumed, last, teachers.seed)
         if call_number == 1:
             assert held == resumed, f"the save interrupted in {name} changed the file"
     assert held > 0

@@ -11,14 +11,8 @@ import pytest
 from tutor.demofiles import load_demos, save_demos
 from tutor.errors import InvalidFileError
 from tutor.framework import AMBIGUOUS, INCORRECT, TeachingSession
-from tutor.tasks.maze import MazeTask
 
 ASSETS = Path(__file__).resolve().parents[1] / "tutor" / "assets" / "demos"
-
-
-@pytest.fixture(scope="module")
-def task():
-    return MazeTask()
 
 
 def replay(task, name):
@@ -29,31 +23,31 @@ def replay(task, name):
     return s, per_demo
 
 
-def test_good_teacher_reaches_ninety_percent_within_eight_demos(task):
-    s, per_demo = replay(task, "good")
+def test_good_teacher_reaches_ninety_percent_within_eight_demos(maze_task):
+    s, per_demo = replay(maze_task, "good")
     score = s.score(rule="target")  # the maze is Experiment 1
     assert score.reached and score.n_demos <= 8
     assert per_demo == set()
     assert s.latest.n_undemonstrated == 0
 
 
-def test_ambiguous_teacher_raises_ambiguous(task):
-    s, per_demo = replay(task, "ambiguous")
+def test_ambiguous_teacher_raises_ambiguous(maze_task):
+    s, per_demo = replay(maze_task, "ambiguous")
     assert per_demo == {AMBIGUOUS}
     flagged = [r.n_demos for r in s.history if AMBIGUOUS in r.kinds]
     assert len(flagged) >= 2
 
 
-def test_undemonstrated_teacher_leaves_undemonstrated_states(task):
-    s, per_demo = replay(task, "undemonstrated")
+def test_undemonstrated_teacher_leaves_undemonstrated_states(maze_task):
+    s, per_demo = replay(maze_task, "undemonstrated")
     assert per_demo == set()
     assert s.latest.n_undemonstrated >= 20
     assert s.latest.efficacy < 0.9
     assert "right" in next(w.message for w in s.latest.warnings)
 
 
-def test_incorrect_teacher_raises_incorrect(task):
-    s, per_demo = replay(task, "incorrect")
+def test_incorrect_teacher_raises_incorrect(maze_task):
+    s, per_demo = replay(maze_task, "incorrect")
     assert per_demo == {INCORRECT}
     third = s.history[2]
     assert not third.demo_passed and "hit obstacle 1" in third.demo_reason

@@ -12,7 +12,6 @@ from tutor.demofiles import bundled_demos
 from tutor.framework import FEEDBACK_POLICIES, reveal
 from tutor.framework.metrics import final_score, run_score, session_score
 from tutor.study.cohort import run_rows
-from tutor.tasks.maze import MazeTask
 from tutor.tasks.maze_run import MazeRun
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.teachers import DEFAULT_POPULATION, MazeTeacher, PickPlaceTeacher
@@ -27,11 +26,6 @@ def _text(markup: str) -> str:
 
 def _lines(app) -> list[str]:
     return [html.unescape(x) for x in re.findall(r"<li>(.*?)</li>", app.panel.value)]
-
-
-@pytest.fixture(scope="module")
-def maze():
-    return MazeTask()
 
 
 # ---------------------------------------------------------------- what each condition shows
@@ -67,15 +61,15 @@ def test_experiment2_panels_say_nothing_of_unseen_plants(condition):
     assert "efficacy ε" in text and text.count("η =") == 1 and "paper's mean" in text
 
 
-def test_vf_shows_totals_and_nf_shows_nothing_until_finish(maze):
+def test_vf_shows_totals_and_nf_shows_nothing_until_finish(maze_task):
     good = bundled_demos("maze_good")
-    vf, nf = MazeTutor("VF", task=maze), MazeTutor("NF", task=maze)
+    vf, nf = MazeTutor("VF", task=maze_task), MazeTutor("NF", task=maze_task)
     for d in good[:2]:
         vf.add(d)
         nf.add(d)
     assert "efficacy ε" in vf.panel.value and "efficacy" not in nf.panel.value
     assert nf.pad.shown == [] and len(vf.pad.shown) == 140
-    practice = MazeTutor("NF", task=maze, practice=True)
+    practice = MazeTutor("NF", task=maze_task, practice=True)
     practice.add(good[0])
     assert "efficacy ε" in practice.panel.value and len(practice.pad.shown) == 140
 
@@ -83,9 +77,9 @@ def test_vf_shows_totals_and_nf_shows_nothing_until_finish(maze):
 # ---------------------------------------------------------------- one voice
 
 
-def test_a_scripted_series_never_contradicts_itself(maze):
+def test_a_scripted_series_never_contradicts_itself(maze_task):
     """Good, incorrect and repeated demos under VF: every step's lines agree."""
-    app = MazeTutor("VF", task=maze)
+    app = MazeTutor("VF", task=maze_task)
     series = [*bundled_demos("maze_incorrect"), *bundled_demos("maze_ambiguous")]
     said_finish = 0
     for demo in series:
@@ -108,8 +102,8 @@ def test_a_scripted_series_never_contradicts_itself(maze):
     assert said_finish <= 1  # the 90 % prompt is said once, when it happens
 
 
-def test_vr_gives_one_next_step_the_rules(maze):
-    app = MazeTutor("VR", task=maze)
+def test_vr_gives_one_next_step_the_rules(maze_task):
+    app = MazeTutor("VR", task=maze_task)
     for demo in bundled_demos("maze_good")[:3]:
         app.add(demo)
         text = " ".join(_lines(app))
@@ -125,8 +119,8 @@ def test_a_generated_demo_is_not_blamed_on_the_trainee():
     assert "the way you meant" not in text
 
 
-def test_finish_gives_one_score_by_the_papers_rule(maze):
-    app = MazeTutor("NF", task=maze)
+def test_finish_gives_one_score_by_the_papers_rule(maze_task):
+    app = MazeTutor("NF", task=maze_task)
     for demo in bundled_demos("maze_undemonstrated"):
         app.add(demo)
     app.finish()
@@ -160,11 +154,11 @@ def test_scoring_rules():
     assert run_score(eps, "final").efficiency == pytest.approx(0.8 / 3)
 
 
-def test_the_tutors_score_equals_the_cohort_studys_on_the_same_files(tmp_path, maze):
+def test_the_tutors_score_equals_the_cohort_studys_on_the_same_files(tmp_path, maze_task):
     """A simulated run saved to a file and opened in the tutor scores the same."""
     rng = np.random.default_rng(3)
     person = DEFAULT_POPULATION.sample(rng)
-    maze_run = MazeTeacher(person, maze).teach("VF", np.random.default_rng(4))
+    maze_run = MazeTeacher(person, maze_task).teach("VF", np.random.default_rng(4))
     pp_run = PickPlaceTeacher(person).teach("BF", np.random.default_rng(5))
     for run, cls in ((maze_run, MazeRun), (pp_run, PickPlaceRun)):
         path = run.save(tmp_path / f"{run.condition}.json")

@@ -23,7 +23,6 @@ from tutor.framework import (
     similarity,
 )
 from tutor.framework.failures import demo_warnings, is_ambiguous, undemonstrated_warning
-from tutor.tasks.maze import MazeTask
 from tutor.tasks.maze_run import MazeRun
 
 # --- metrics
@@ -176,18 +175,13 @@ def test_thresholds_validation():
 # --- the session on the maze
 
 
-@pytest.fixture(scope="module")
-def task():
-    return MazeTask()
-
-
 def demo_from(task, start, seed=0):
     return task.layout.reference_path(start, np.random.default_rng(seed), jitter=0.003)
 
 
-def test_session_record_fields_and_undemonstrated_set(task):
-    s = TeachingSession(task)
-    r = s.add_demo(demo_from(task, (0.03, 0.03)))
+def test_session_record_fields_and_undemonstrated_set(maze_task):
+    s = TeachingSession(maze_task)
+    r = s.add_demo(demo_from(maze_task, (0.03, 0.03)))
     assert r.n_demos == 1 and r.delta == r.efficacy
     assert r.passed.shape == (140,) and r.passed.dtype == bool
     assert r.efficiency == pytest.approx(r.efficacy)
@@ -202,13 +196,13 @@ def test_session_record_fields_and_undemonstrated_set(task):
     assert s.realisations.shape == (140, 200, 2)
 
 
-def test_rejected_demo_leaves_session_and_run_unchanged(task):
-    s = TeachingSession(task)
-    s.add_demo(demo_from(task, (0.03, 0.03)))
-    run = MazeRun.new("VF", task, trainee=Trainee.from_name("Ada"))
-    run.add_demo(demo_from(task, (0.03, 0.03)))
+def test_rejected_demo_leaves_session_and_run_unchanged(maze_task):
+    s = TeachingSession(maze_task)
+    s.add_demo(demo_from(maze_task, (0.03, 0.03)))
+    run = MazeRun.new("VF", maze_task, trainee=Trainee.from_name("Ada"))
+    run.add_demo(demo_from(maze_task, (0.03, 0.03)))
     history, demos, record = [r.to_dict() for r in s.history], s.demos, run.record
-    bad = demo_from(task, (0.1, 0.03))
+    bad = demo_from(maze_task, (0.1, 0.03))
     bad[10, 1] = np.nan
     for raw in (bad, bad[:1], bad[:, :2], bad * [1, 100, 100]):
         with pytest.raises(InvalidDemoError):
@@ -220,29 +214,29 @@ def test_rejected_demo_leaves_session_and_run_unchanged(task):
     assert run.record == record and run.n_demos == 1
 
 
-def test_demo_outside_the_maze_is_accepted_and_flagged_incorrect(task):
-    s = TeachingSession(task)
+def test_demo_outside_the_maze_is_accepted_and_flagged_incorrect(maze_task):
+    s = TeachingSession(maze_task)
     t = np.linspace(0, 1, 50)
-    start, end = np.array([0.05, 0.03]), task.layout.target_center
+    start, end = np.array([0.05, 0.03]), maze_task.layout.target_center
     straight = np.column_stack([t, start + np.outer(t, end - start)])  # through both obstacles
     r = s.add_demo(straight)
     assert not r.demo_passed and "hit obstacle" in r.demo_reason
     assert INCORRECT in r.kinds
 
 
-def test_undo_and_remove(task):
-    s = TeachingSession(task)
-    first = s.add_demo(demo_from(task, (0.03, 0.03)))
-    s.add_demo(demo_from(task, (0.17, 0.03)))
+def test_undo_and_remove(maze_task):
+    s = TeachingSession(maze_task)
+    first = s.add_demo(demo_from(maze_task, (0.03, 0.03)))
+    s.add_demo(demo_from(maze_task, (0.17, 0.03)))
     back = s.undo()
     assert s.n_demos == 1 and back.efficacy == first.efficacy
-    s.add_demo(demo_from(task, (0.17, 0.03)))
-    third = s.add_demo(demo_from(task, (0.10, 0.03)))
+    s.add_demo(demo_from(maze_task, (0.17, 0.03)))
+    third = s.add_demo(demo_from(maze_task, (0.10, 0.03)))
     again = s.remove_demo(1)
     assert s.n_demos == 2
-    fresh = TeachingSession(task)
-    fresh.add_demo(demo_from(task, (0.17, 0.03)))
-    assert again.efficacy == fresh.add_demo(demo_from(task, (0.10, 0.03))).efficacy
+    fresh = TeachingSession(maze_task)
+    fresh.add_demo(demo_from(maze_task, (0.17, 0.03)))
+    assert again.efficacy == fresh.add_demo(demo_from(maze_task, (0.10, 0.03))).efficacy
     assert third.n_demos == 3
     with pytest.raises(InvalidParameterError):
         s.remove_demo(7)
@@ -251,31 +245,31 @@ def test_undo_and_remove(task):
         s.undo()
 
 
-def test_feedback_modes_choose_r(task):
-    demo = demo_from(task, (0.03, 0.03))
-    assert TeachingSession(task, feedback="none").add_demo(demo).shown.size == 0
-    batch = TeachingSession(task, feedback="batch", batch=[0, 19, 139]).add_demo(demo)
+def test_feedback_modes_choose_r(maze_task):
+    demo = demo_from(maze_task, (0.03, 0.03))
+    assert TeachingSession(maze_task, feedback="none").add_demo(demo).shown.size == 0
+    batch = TeachingSession(maze_task, feedback="batch", batch=[0, 19, 139]).add_demo(demo)
     assert batch.shown.tolist() == [0, 19, 139]
-    replay = TeachingSession(task, feedback="replay").add_demo(demo)
+    replay = TeachingSession(maze_task, feedback="replay").add_demo(demo)
     assert replay.shown.size == 1
-    assert np.linalg.norm(task.conditions[replay.shown[0]] - [0.03, 0.03]) < 0.01
-    sel = TeachingSession(task, feedback="selected").add_demo(demo, shown=[5, 6])
+    assert np.linalg.norm(maze_task.conditions[replay.shown[0]] - [0.03, 0.03]) < 0.01
+    sel = TeachingSession(maze_task, feedback="selected").add_demo(demo, shown=[5, 6])
     assert sel.shown.tolist() == [5, 6]
     with pytest.raises(InvalidParameterError):
-        TeachingSession(task, feedback="sometimes")
+        TeachingSession(maze_task, feedback="sometimes")
     with pytest.raises(InvalidParameterError):
-        TeachingSession(task, feedback="batch")
+        TeachingSession(maze_task, feedback="batch")
 
 
 # --- the run record on the maze: files
 
 
-def test_run_record_round_trip_gives_identical_results(task, tmp_path):
-    run = MazeRun.new("VF", task, trainee=Trainee.from_name("Zoë"))
+def test_run_record_round_trip_gives_identical_results(maze_task, tmp_path):
+    run = MazeRun.new("VF", maze_task, trainee=Trainee.from_name("Zoë"))
     for start in [(0.03, 0.03), (0.17, 0.03), (0.10, 0.03)]:
-        run.add_demo(demo_from(task, start))
+        run.add_demo(demo_from(maze_task, start))
     path = run.save(tmp_path / "run.json")
-    loaded = MazeRun.load(path, task)
+    loaded = MazeRun.load(path, maze_task)
     assert loaded.record == run.record  # every field, attempt and event
     assert [r.to_dict() for r in loaded.session.history] == [
         r.to_dict() for r in run.session.history
@@ -286,10 +280,10 @@ def test_run_record_round_trip_gives_identical_results(task, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def valid_record(task):
+def valid_record(maze_task):
     """The dict of a VF run with one demo (corrupted by the cases below)."""
-    run = MazeRun.new("VF", task, trainee=Trainee.from_name("Ada"))
-    run.add_demo(demo_from(task, (0.03, 0.03)))
+    run = MazeRun.new("VF", maze_task, trainee=Trainee.from_name("Ada"))
+    run.add_demo(demo_from(maze_task, (0.03, 0.03)))
     return run.to_dict()
 
 
@@ -335,43 +329,43 @@ def _set(path, value):
         (lambda r: "[" * 100000 + "]" * 100000, "nested too deeply"),
     ],
 )
-def test_corrupt_run_files_give_clear_errors(task, tmp_path, valid_record, content, words):
+def test_corrupt_run_files_give_clear_errors(maze_task, tmp_path, valid_record, content, words):
     path = tmp_path / "bad.json"
     path.write_text(content(valid_record))
     with pytest.raises(InvalidFileError, match=words):
-        MazeRun.load(path, task)
+        MazeRun.load(path, maze_task)
 
 
-def test_a_run_of_another_task_is_a_wrong_run(task, tmp_path, valid_record):
+def test_a_run_of_another_task_is_a_wrong_run(maze_task, tmp_path, valid_record):
     path = tmp_path / "other.json"
     path.write_text(_set(("task",), "pickplace")(valid_record))
     with pytest.raises(WrongRunError, match="not a 'maze' run"):
-        MazeRun.load(path, task)
+        MazeRun.load(path, maze_task)
 
 
-def test_pickle_file_is_refused(task, tmp_path):
+def test_pickle_file_is_refused(maze_task, tmp_path):
     import pickle
 
     path = tmp_path / "evil.json"
     path.write_bytes(pickle.dumps({"format": "lfd-tutor-run"}))
     with pytest.raises(InvalidFileError, match="UTF-8|not valid JSON"):
-        MazeRun.load(path, task)
+        MazeRun.load(path, maze_task)
 
 
-def test_saving_over_a_run_replaces_it_whole(task, tmp_path):
-    run = MazeRun.new("VF", task)
-    run.add_demo(demo_from(task, (0.03, 0.03)))
+def test_saving_over_a_run_replaces_it_whole(maze_task, tmp_path):
+    run = MazeRun.new("VF", maze_task)
+    run.add_demo(demo_from(maze_task, (0.03, 0.03)))
     path = run.save(tmp_path / "s.json")
-    run.add_demo(demo_from(task, (0.17, 0.03)))
+    run.add_demo(demo_from(maze_task, (0.17, 0.03)))
     run.save(path)
     saved = json.loads(path.read_text())
     assert len(saved["attempts"][-1]["demos"]) == 2
     assert RunRecord.from_dict(saved) == run.record
 
 
-def test_explicit_condition_is_kept_and_round_trips(task, tmp_path):
-    s = TeachingSession(task)
-    demo = demo_from(task, (0.03, 0.03))
+def test_explicit_condition_is_kept_and_round_trips(maze_task, tmp_path):
+    s = TeachingSession(maze_task)
+    demo = demo_from(maze_task, (0.03, 0.03))
     s.add_demo(demo, condition=[0.031, 0.029])
     np.testing.assert_allclose(s.conditions[0], [0.031, 0.029])
     with pytest.raises(InvalidParameterError, match="condition"):
@@ -379,12 +373,12 @@ def test_explicit_condition_is_kept_and_round_trips(task, tmp_path):
     with pytest.raises(InvalidParameterError, match="condition"):
         s.add_demo(demo, condition=[np.nan, 0.2])
     assert s.n_demos == 1
-    run = MazeRun.new("VF", task)
+    run = MazeRun.new("VF", maze_task)
     run.add_demo(demo, condition=[0.031, 0.029])
     with pytest.raises(InvalidParameterError, match="condition"):
         run.add_demo(demo, condition=[np.nan, 0.2])
     assert run.attempt.demos[0].condition == (0.031, 0.029) and run.n_demos == 1
-    loaded = MazeRun.load(run.save(tmp_path / "s.json"), task)
+    loaded = MazeRun.load(run.save(tmp_path / "s.json"), maze_task)
     np.testing.assert_allclose(loaded.session.conditions[0], [0.031, 0.029])
     assert loaded.session.latest.efficacy == s.latest.efficacy == run.session.latest.efficacy
 

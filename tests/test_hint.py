@@ -21,15 +21,9 @@ from tutor.tasks.hint import (
 )
 from tutor.tasks.lookahead import State, best_next
 from tutor.tasks.optimal_reference import optimal_reference
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.teachers.pickplace import PickPlaceTeacher
 from tutor.teachers.traits import DEFAULT_POPULATION, Population, TeacherTraits
-
-
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
 
 
 def demonstrated(task, plants, condition="HF", seed=0) -> PickPlaceRun:
@@ -43,17 +37,17 @@ def demonstrated(task, plants, condition="HF", seed=0) -> PickPlaceRun:
 # ---------------------------------------------------------------- the condition
 
 
-def test_hf_is_nf_plus_a_hint_beyond_the_paper(task):
+def test_hf_is_nf_plus_a_hint_beyond_the_paper(pickplace_task):
     design = PickPlaceRun.protocol()
     assert design.extra_codes == ("AF", "HF") and design.codes[-2:] == ("AF", "HF")
     hf = design.condition("HF")
     assert hf.policy.silent and hf.hinted and not hf.paper and hf.paper_code == "NF"
-    run = PickPlaceRun("HF", task)
-    assert run.hinted and not PickPlaceRun("NF", task).hinted
+    run = PickPlaceRun("HF", pickplace_task)
+    assert run.hinted and not PickPlaceRun("NF", pickplace_task).hinted
     assert run.feedback_seconds == 0.0
     rng = np.random.default_rng(3)
-    raw = task.demonstrate(12, rng)
-    nf = PickPlaceRun("NF", task)
+    raw = pickplace_task.demonstrate(12, rng)
+    nf = PickPlaceRun("NF", pickplace_task)
     nf.demonstrate(12, raw=raw)
     run.hint()
     run.demonstrate(12, raw=raw)
@@ -66,38 +60,42 @@ def test_hf_is_nf_plus_a_hint_beyond_the_paper(task):
 # ---------------------------------------------------------------- the hint
 
 
-def test_with_no_demo_the_hint_is_the_optimal_teachers_first_pick(task):
+def test_with_no_demo_the_hint_is_the_optimal_teachers_first_pick(pickplace_task):
     reference = optimal_reference("pickplace")
-    hint = PickPlaceRun("HF", task).hint()
+    hint = PickPlaceRun("HF", pickplace_task).hint()
     assert isinstance(hint, Hint)
     assert hint.plant == reference.picks[0] and hint.efficacy == reference.greedy[0]
     assert hint.seconds < 0.05  # read, not computed
-    assert reference.n_conditions == len(task.conditions)
+    assert reference.n_conditions == len(pickplace_task.conditions)
 
 
-def test_after_demos_the_hint_is_the_best_of_the_pruned_candidates(task):
-    run = demonstrated(task, [44, 3])
+def test_after_demos_the_hint_is_the_best_of_the_pruned_candidates(pickplace_task):
+    run = demonstrated(pickplace_task, [44, 3])
     hint = run.hint()
-    candidates = hint_candidates(task, run)
+    candidates = hint_candidates(pickplace_task, run)
     assert len(candidates) == HINT_CANDIDATES == len(set(candidates.tolist()))
     assert not {44, 3} & set(candidates.tolist())  # a demonstrated plant scores 0: last
     assert hint.plant in candidates
-    best = best_next(task, State.from_session(run), hint_bank(task), candidates, workers=1)
+    best = best_next(
+        pickplace_task, State.from_session(run), hint_bank(pickplace_task), candidates, workers=1
+    )
     assert (hint.plant, hint.efficacy) == (best.index, best.efficacy)
     # the efficacy is the session's own once that careful demo is given
-    run.add_demo(hint_bank(task).demos[hint.plant], condition=task.conditions[hint.plant])
+    run.add_demo(
+        hint_bank(pickplace_task).demos[hint.plant], condition=pickplace_task.conditions[hint.plant]
+    )
     assert run.session.latest.efficacy == pytest.approx(hint.efficacy, abs=1e-12)
 
 
-def test_the_candidates_need_a_demo_and_a_count(task):
+def test_the_candidates_need_a_demo_and_a_count(pickplace_task):
     with pytest.raises(InvalidParameterError, match="give a demonstration first"):
-        hint_candidates(task, PickPlaceRun("HF", task))
+        hint_candidates(pickplace_task, PickPlaceRun("HF", pickplace_task))
     with pytest.raises(InvalidParameterError, match="whole number"):
-        hint_candidates(task, demonstrated(task, [5]), n=0)
+        hint_candidates(pickplace_task, demonstrated(pickplace_task, [5]), n=0)
 
 
-def test_the_hint_is_cached_and_undo_and_reset_invalidate_it(task):
-    run = demonstrated(task, [44])
+def test_the_hint_is_cached_and_undo_and_reset_invalidate_it(pickplace_task):
+    run = demonstrated(pickplace_task, [44])
     first = run.hint()
     assert run.hint() is first  # computed once per demo state
     run.demonstrate(first.plant, rng=np.random.default_rng(9))
@@ -111,23 +109,23 @@ def test_the_hint_is_cached_and_undo_and_reset_invalidate_it(task):
     assert run.hint().plant == optimal_reference("pickplace").picks[0]
 
 
-def test_the_bank_is_one_careful_demo_per_plant_made_once(task):
-    bank = hint_bank(task)
-    assert hint_bank(task) is bank
-    assert bank.index.tolist() == list(range(len(task.conditions)))
+def test_the_bank_is_one_careful_demo_per_plant_made_once(pickplace_task):
+    bank = hint_bank(pickplace_task)
+    assert hint_bank(pickplace_task) is bank
+    assert bank.index.tolist() == list(range(len(pickplace_task.conditions)))
     assert set(bank.draw.tolist()) == {0}
 
 
-def test_next_demo_hint_works_on_a_session_too(task):
-    run = demonstrated(task, [0, 99], condition="NF")
-    assert next_demo_hint(task, run.session).plant == run.hint().plant
+def test_next_demo_hint_works_on_a_session_too(pickplace_task):
+    run = demonstrated(pickplace_task, [0, 99], condition="NF")
+    assert next_demo_hint(pickplace_task, run.session).plant == run.hint().plant
 
 
 # ---------------------------------------------------------------- the record
 
 
-def test_an_hf_run_records_hint_following_and_round_trips(task, tmp_path):
-    run = PickPlaceRun("HF", task)
+def test_an_hf_run_records_hint_following_and_round_trips(pickplace_task, tmp_path):
+    run = PickPlaceRun("HF", pickplace_task)
     rng = np.random.default_rng(5)
     hinted = run.hint().plant
     run.demonstrate(hinted, rng=rng)
@@ -137,7 +135,7 @@ def test_an_hf_run_records_hint_following_and_round_trips(task, tmp_path):
     flags = [d.followed_rule for d in run.attempt.demos]
     assert flags == [True, False, True]
     path = run.save(tmp_path / "hf.json")
-    back = PickPlaceRun.load(path, task)
+    back = PickPlaceRun.load(path, pickplace_task)
     assert [d.followed_rule for d in back.attempt.demos] == flags
     assert back.condition == "HF" and back.elapsed == pytest.approx(run.elapsed)
     again = RunRecord.from_dict(json.loads(path.read_text(encoding="utf-8")))
@@ -147,7 +145,7 @@ def test_an_hf_run_records_hint_following_and_round_trips(task, tmp_path):
     schema = json.loads(schema_path.read_text(encoding="utf-8"))
     jsonschema.validate(json.loads(path.read_text(encoding="utf-8")), schema)
     # outside HF nothing is recorded
-    nf = demonstrated(task, [44], condition="NF")
+    nf = demonstrated(pickplace_task, [44], condition="NF")
     assert nf.attempt.demos[0].followed_rule is None
 
 
@@ -191,11 +189,11 @@ def test_compliance_is_a_population_trait_drawn_last():
 
 
 @pytest.mark.parametrize("compliance", [1.0, 0.0])
-def test_the_simulated_hf_teacher_follows_the_hint_with_its_compliance(task, compliance):
+def test_the_simulated_hf_teacher_follows_the_hint_with_its_compliance(pickplace_task, compliance):
     traits = dataclasses.replace(
         DEFAULT_POPULATION.sample(np.random.default_rng(3)), compliance=compliance
     )
-    run = PickPlaceTeacher(traits, task).teach("HF", np.random.default_rng(4))
+    run = PickPlaceTeacher(traits, pickplace_task).teach("HF", np.random.default_rng(4))
     demos = run.attempt.demos
     assert run.finished and demos
     assert all(d.followed_rule is (compliance == 1.0) for d in demos)
@@ -206,20 +204,18 @@ def test_the_simulated_hf_teacher_follows_the_hint_with_its_compliance(task, com
     assert run.attempt.tests and all(t.after_run for t in run.attempt.tests)
 
 
-
-
 # ---------------------------------------------------------------- the tutor
 
 
-def test_the_tutor_says_the_hint_and_marks_the_plant(task):
+def test_the_tutor_says_the_hint_and_marks_the_plant(pickplace_task):
     from tutor.views.pickplace_app import PickPlaceTutor, compare_runs
 
-    tutor = PickPlaceTutor("HF", task=task, seed=1)
+    tutor = PickPlaceTutor("HF", task=pickplace_task, seed=1)
     first = tutor.run.hint().plant
     assert "The robot would learn most from plant row 1, column 1 next" in tutor.panel.value
     tutor.demonstrate(44)
     hint = tutor.run.hint()
-    r, c = divmod(hint.plant, task.scene.cols)
+    r, c = divmod(hint.plant, pickplace_task.scene.cols)
     assert f"plant row {r + 1}, column {c + 1} next" in tutor.panel.value
     marked = [i for i, b in enumerate(tutor.plant_buttons) if "lfd-hint" in b._dom_classes]
     assert marked == [hint.plant] != [first]
@@ -237,19 +233,19 @@ def test_the_tutor_says_the_hint_and_marks_the_plant(task):
     assert "NF shows nothing either" in compare_runs([tutor])
 
 
-def test_no_hint_in_the_papers_conditions(task):
+def test_no_hint_in_the_papers_conditions(pickplace_task):
     from tutor.views.pickplace_app import PickPlaceTutor
 
-    tutor = PickPlaceTutor("NF", task=task, seed=1)
+    tutor = PickPlaceTutor("NF", task=pickplace_task, seed=1)
     tutor.demonstrate(44)
     assert "learn most from" not in tutor.panel.value
     assert not [b for b in tutor.plant_buttons if "lfd-hint" in b._dom_classes]
 
 
-def test_a_hint_that_fails_is_said_not_raised(task, monkeypatch):
+def test_a_hint_that_fails_is_said_not_raised(pickplace_task, monkeypatch):
     from tutor.views.pickplace_app import PickPlaceTutor
 
-    tutor = PickPlaceTutor("HF", task=task, seed=1)
+    tutor = PickPlaceTutor("HF", task=pickplace_task, seed=1)
 
     def broken(self):
         raise InvalidParameterError("the bank is empty")

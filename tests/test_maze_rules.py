@@ -3,38 +3,31 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from tutor.framework import TeachingSession
-from tutor.tasks.maze import MazeTask
 from tutor.tasks.maze_rules import RULE_RADIUS, advise, advise_from, followed
 
 
-@pytest.fixture(scope="module")
-def task():
-    return MazeTask()
-
-
-def test_rule_one_before_any_demo(task):
-    advice = advise(task, TeachingSession(task))
+def test_rule_one_before_any_demo(maze_task):
+    advice = advise(maze_task, TeachingSession(maze_task))
     assert advice.rule == 1 and advice.center is None
     assert followed(advice, (0.19, 0.01))
 
 
-def test_rule_two_centres_on_the_first_start(task):
-    s = TeachingSession(task)
-    s.add_demo(task.layout.reference_path((0.03, 0.03)))
-    advice = advise(task, s)
+def test_rule_two_centres_on_the_first_start(maze_task):
+    s = TeachingSession(maze_task)
+    s.add_demo(maze_task.layout.reference_path((0.03, 0.03)))
+    advice = advise(maze_task, s)
     assert advice.rule == 2
     np.testing.assert_allclose(advice.center, (0.03, 0.03))
     assert followed(advice, (0.05, 0.04)) and not followed(advice, (0.10, 0.03))
 
 
-def test_rule_three_marks_a_green_start_next_to_the_most_red(task):
-    starts = task.conditions
+def test_rule_three_marks_a_green_start_next_to_the_most_red(maze_task):
+    starts = maze_task.conditions
     first = np.array([0.03, 0.03])
     passed = starts[:, 0] < 0.12  # left green, right red
-    advice = advise_from(task, passed, first)
+    advice = advise_from(maze_task, passed, first)
     assert advice.rule == 3 and "right" in advice.message
     i = np.argmin(np.linalg.norm(starts - advice.center, axis=1))
     assert passed[i]  # the marked start point is green
@@ -45,17 +38,17 @@ def test_rule_three_marks_a_green_start_next_to_the_most_red(task):
     assert not followed(advice, (0.01, 0.01))
 
 
-def test_rule_two_until_the_first_start_is_surrounded(task):
-    starts = task.conditions
+def test_rule_two_until_the_first_start_is_surrounded(maze_task):
+    starts = maze_task.conditions
     passed = np.ones(len(starts), bool)
     passed[np.argmin(np.linalg.norm(starts - (0.05, 0.03), axis=1))] = False  # one red nearby
-    assert advise_from(task, passed, (0.03, 0.03)).rule == 2
-    assert advise_from(task, np.ones(len(starts), bool), (0.03, 0.03)).rule == 0
+    assert advise_from(maze_task, passed, (0.03, 0.03)).rule == 2
+    assert advise_from(maze_task, np.ones(len(starts), bool), (0.03, 0.03)).rule == 0
 
 
-def test_rule_zero_when_all_green(task):
-    s = TeachingSession(task)
+def test_rule_zero_when_all_green(maze_task):
+    s = TeachingSession(maze_task)
     for demo in [(0.03, 0.03), (0.17, 0.03), (0.10, 0.03), (0.06, 0.052), (0.14, 0.052)]:
-        s.add_demo(task.layout.reference_path(demo))
+        s.add_demo(maze_task.layout.reference_path(demo))
     assert s.latest.efficacy == 1.0  # these five starts cover the whole start zone
-    assert advise(task, s).rule == 0
+    assert advise(maze_task, s).rule == 0

@@ -14,21 +14,10 @@ from tutor.resources import asset
 from tutor.study import optimal
 from tutor.tasks.maze import MazeTask
 from tutor.tasks.optimal_reference import load_references, optimal_reference
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.views.maze_app import MazeTutor
 from tutor.views.text import finish_summary, optimal_sentence
 
 BUNDLED = json.loads(asset("optimal.json").read_text())
-
-
-@pytest.fixture(scope="module")
-def maze():
-    return MazeTask()
-
-
-@pytest.fixture(scope="module")
-def tray():
-    return PickPlaceTask()
 
 
 def _path_bank(task, name):
@@ -55,7 +44,7 @@ class Corner(MazeTask):
 # ---------------------------------------------------------------- the fast parts are exact
 
 
-@pytest.mark.parametrize("name", ["maze", "tray"])
+@pytest.mark.parametrize("name", ["maze_task", "pickplace_task"])
 def test_realisation_and_fast_judging_equal_the_sessions(name, request):
     task = request.getfixturevalue(name)
     bank = optimal.make_bank(task, 1, indices=[0, len(task.conditions) - 1, 7])
@@ -76,9 +65,9 @@ def test_realisation_and_fast_judging_equal_the_sessions(name, request):
         np.testing.assert_array_equal(passed, record.passed)
 
 
-def test_the_bank_is_careful_demos_seeded_per_condition(maze):
-    full = optimal.make_bank(maze, 2, indices=[3, 50])
-    part = optimal.make_bank(maze, 1, indices=[50])
+def test_the_bank_is_careful_demos_seeded_per_condition(maze_task):
+    full = optimal.make_bank(maze_task, 2, indices=[3, 50])
+    part = optimal.make_bank(maze_task, 1, indices=[50])
     assert (
         len(full) == 4
         and full.index.tolist() == [3, 50, 3, 50]
@@ -93,26 +82,26 @@ def test_the_bank_is_careful_demos_seeded_per_condition(maze):
     np.testing.assert_array_equal(full.demos[1], part.demos[0])
     assert not np.array_equal(full.demos[1], full.demos[3])  # another draw of the hand
     for demo, cond in zip(full.demos, full.conditions, strict=True):
-        assert maze.judge_demo(demo, cond).passed[0]
+        assert maze_task.judge_demo(demo, cond).passed[0]
     assert len(full.first_draws(1)) == 2
 
 
 @pytest.mark.parametrize(
     "kwargs", [{"draws": 0}, {"draws": 1.5}, {"seed": -1}, {"indices": [140]}, {"indices": []}]
 )
-def test_a_bad_bank_request_is_named(maze, kwargs):
+def test_a_bad_bank_request_is_named(maze_task, kwargs):
     with pytest.raises(InvalidParameterError):
-        optimal.make_bank(maze, **kwargs)
+        optimal.make_bank(maze_task, **kwargs)
 
 
 # ---------------------------------------------------------------- greedy and pairs
 
 
 @pytest.fixture(scope="module")
-def tiny(maze):
+def tiny(maze_task):
     """The bundled greedy path's three demos and two distractors (start points 0, 139)."""
-    path = _path_bank(maze, "maze")
-    others = optimal.make_bank(maze, 1, indices=[0, 139])
+    path = _path_bank(maze_task, "maze")
+    others = optimal.make_bank(maze_task, 1, indices=[0, 139])
     demos = np.concatenate([others.demos[:1], path.demos, others.demos[1:]])
     return optimal.Bank(
         demos,
@@ -122,17 +111,17 @@ def tiny(maze):
     )
 
 
-def test_greedy_on_a_tiny_bank_reaches_the_known_optimum(maze, tiny):
-    found = optimal.greedy(maze, tiny, workers=1)
+def test_greedy_on_a_tiny_bank_reaches_the_known_optimum(maze_task, tiny):
+    found = optimal.greedy(maze_task, tiny, workers=1)
     # brute force: every single demo, and every pair after the greedy first demo
-    empty = optimal.State.empty(maze)
+    empty = optimal.State.empty(maze_task)
     singles = [
-        optimal.efficacy_after(maze, empty, d, c)[0]
+        optimal.efficacy_after(maze_task, empty, d, c)[0]
         for d, c in zip(tiny.demos, tiny.conditions, strict=True)
     ]
     assert found.best_single == max(singles) == found.efficacies[0]
     assert found.positions[0] == int(np.argmax(singles))  # ties: the first
-    pairs = optimal.pair_bound(maze, tiny, workers=1)
+    pairs = optimal.pair_bound(maze_task, tiny, workers=1)
     assert pairs.ordered and pairs.n_pairs == len(tiny) * (len(tiny) - 1)
     assert found.efficacies[1] <= pairs.best
     # the optimum: no pair of the bank reaches 0.9, and three demos reach everything
@@ -143,11 +132,11 @@ def test_greedy_on_a_tiny_bank_reaches_the_known_optimum(maze, tiny):
     assert td["eta"]["target"] == pytest.approx(1 / 3, abs=1e-6)
 
 
-def test_the_pair_bound_finds_a_pair_that_suffices(maze, tiny):
+def test_the_pair_bound_finds_a_pair_that_suffices(maze_task, tiny):
     """On a B^ of the start points the first two greedy demos win, that pair reaches 1."""
-    state = optimal.State.empty(maze)
+    state = optimal.State.empty(maze_task)
     for p in (1, 2):
-        state, _, passed = state.added(maze, tiny.demos[p], tiny.conditions[p])
+        state, _, passed = state.added(maze_task, tiny.demos[p], tiny.conditions[p])
     keep = np.flatnonzero(passed)
     task = Corner(keep)
     pairs = optimal.pair_bound(task, tiny, workers=1)
@@ -157,15 +146,15 @@ def test_the_pair_bound_finds_a_pair_that_suffices(maze, tiny):
     assert td["n_demos"] <= 2 and td["exact"]
 
 
-def test_best_next_is_the_greedy_step_of_a_session_with_ties_to_the_first(maze, tiny):
-    session = TeachingSession(maze, feedback="all")
+def test_best_next_is_the_greedy_step_of_a_session_with_ties_to_the_first(maze_task, tiny):
+    session = TeachingSession(maze_task, feedback="all")
     session.add_demo(tiny.demos[1], condition=tiny.conditions[1])
     doubled = tiny.subset([0, 2, 2, 3])  # the same demo twice: a tie
-    choice = optimal.best_next(maze, session, doubled, workers=1)
+    choice = optimal.best_next(maze_task, session, doubled, workers=1)
     assert choice.position == 1 and choice.index == int(tiny.index[2])
     state = optimal.State.from_session(session)
     scores = [
-        optimal.efficacy_after(maze, state, d, c)[0]
+        optimal.efficacy_after(maze_task, state, d, c)[0]
         for d, c in zip(doubled.demos, doubled.conditions, strict=True)
     ]
     assert choice.efficacy == max(scores)
@@ -173,16 +162,16 @@ def test_best_next_is_the_greedy_step_of_a_session_with_ties_to_the_first(maze, 
         session.add_demo(doubled.demos[1], condition=doubled.conditions[1]).efficacy
         == choice.efficacy
     )
-    only = optimal.best_next(maze, state, doubled, candidates=[0, 3], workers=1)
+    only = optimal.best_next(maze_task, state, doubled, candidates=[0, 3], workers=1)
     assert only.position in (0, 3) and only.candidates.tolist() == [0, 3]
     with pytest.raises(InvalidParameterError):
-        optimal.best_next(maze, state, doubled, candidates=[4])
+        optimal.best_next(maze_task, state, doubled, candidates=[4])
 
 
-def test_two_workers_give_the_same_choice(maze, tiny):
-    state = optimal.State.empty(maze)
-    one = optimal.best_next(maze, state, tiny, workers=1)
-    two = optimal.best_next(maze, state, tiny, workers=2)
+def test_two_workers_give_the_same_choice(maze_task, tiny):
+    state = optimal.State.empty(maze_task)
+    one = optimal.best_next(maze_task, state, tiny, workers=1)
+    two = optimal.best_next(maze_task, state, tiny, workers=2)
     assert (one.position, one.efficacy) == (two.position, two.efficacy)
     np.testing.assert_array_equal(one.scores, two.scores)
 
@@ -214,9 +203,9 @@ def test_the_bundled_reference_is_what_the_code_computes_for_a_reduced_bank():
 
 
 @pytest.mark.parametrize("name", ["maze", "pickplace"])
-def test_the_bundled_numbers_replay_in_a_session(name, maze, tray):
+def test_the_bundled_numbers_replay_in_a_session(name, maze_task, pickplace_task):
     """The greedy path and the best pair give, in a TeachingSession, the bundled eps."""
-    task = maze if name == "maze" else tray
+    task = maze_task if name == "maze" else pickplace_task
     entry = BUNDLED["tasks"][name]
     bank = _path_bank(task, name)
     session = TeachingSession(task, feedback="none")
@@ -272,8 +261,8 @@ def test_a_broken_reference_file_is_named(tmp_path):
 # ---------------------------------------------------------------- what the trainee reads
 
 
-def test_a_finished_run_says_how_few_demos_this_robot_needs(maze):
-    app = MazeTutor("VF", task=maze)
+def test_a_finished_run_says_how_few_demos_this_robot_needs(maze_task):
+    app = MazeTutor("VF", task=maze_task)
     for demo in bundled_demos("maze_good"):
         app.add(demo)
     app.finish()
@@ -284,7 +273,7 @@ def test_a_finished_run_says_how_few_demos_this_robot_needs(maze):
     assert f"to reach 90% is {ref.n_demos}" in summary
     assert f"best possible η by this experiment's score is {ref.best_eta:.1%}" in summary
     assert summary.count("η =") == 1  # one score: the trainee's
-    assert optimal_sentence(maze) in summary.replace(f"You used {n} demonstrations; t", "T")
+    assert optimal_sentence(maze_task) in summary.replace(f"You used {n} demonstrations; t", "T")
 
 
 def _optimal_lines(figure) -> list[float]:
@@ -296,17 +285,17 @@ def _optimal_lines(figure) -> list[float]:
     ]
 
 
-def test_the_results_and_the_cohort_figures_draw_the_optimal_line(maze):
+def test_the_results_and_the_cohort_figures_draw_the_optimal_line(maze_task):
     import matplotlib.pyplot as plt
 
     from tutor.study.figures import experiment1_figure, experiment2_figure
     from tutor.study.report import load_result
     from tutor.views.maze_app import compare_runs, plot_runs
 
-    app = MazeTutor("VF", task=maze)
+    app = MazeTutor("VF", task=maze_task)
     for demo in bundled_demos("maze_good"):
         app.add(demo)
-    assert optimal_sentence(maze) in compare_runs([app])
+    assert optimal_sentence(maze_task) in compare_runs([app])
     ax = plot_runs([app])
     ref = optimal_reference("maze")
     lines = [ln for ln in ax.get_lines() if ln.get_label().startswith("optimal teacher")]
@@ -325,21 +314,21 @@ def test_the_results_and_the_cohort_figures_draw_the_optimal_line(maze):
         plt.close(plain)
 
 
-def test_the_lookahead_below_the_views_hints_from_a_run(tray):
+def test_the_lookahead_below_the_views_hints_from_a_run(pickplace_task):
     """The next-demo hint's call: a run, a bank of the task's own scripted demos."""
     from tutor.tasks import lookahead
     from tutor.tasks.pickplace_protocol import PickPlaceRun
 
-    run = PickPlaceRun.new("BF", tray)
+    run = PickPlaceRun.new("BF", pickplace_task)
     run.demonstrate(0, rng=np.random.default_rng(1))
-    bank = lookahead.make_bank(tray, 1, indices=[0, 4, 76, 99])
+    bank = lookahead.make_bank(pickplace_task, 1, indices=[0, 4, 76, 99])
     for demo, cond in zip(bank.demos, bank.conditions, strict=True):
-        assert tray.judge_demo(demo, cond).passed[0]
-    hint = lookahead.best_next(tray, run, bank, workers=1)
+        assert pickplace_task.judge_demo(demo, cond).passed[0]
+    hint = lookahead.best_next(pickplace_task, run, bank, workers=1)
     state = lookahead.State.from_session(run)
     assert len(state.demos) == 1
     scores = [
-        lookahead.efficacy_after(tray, state, d, c)[0]
+        lookahead.efficacy_after(pickplace_task, state, d, c)[0]
         for d, c in zip(bank.demos, bank.conditions, strict=True)
     ]
     assert hint.efficacy == max(scores) and hint.index == int(bank.index[np.argmax(scores)])

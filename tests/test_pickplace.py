@@ -10,11 +10,6 @@ from tutor.framework import INCORRECT, TeachingSession
 from tutor.tasks.pickplace import PickPlaceTask
 
 
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
-
-
 def carry(task, plant, grab_offset=(0, 0, 0), release_offset=(0, 0, 0), n=200, dip=None):
     """A hand-made (T, 4) trajectory: start -> plant (close) -> release point (open)."""
     plant_pos = task.conditions[plant] + np.asarray(grab_offset)
@@ -34,32 +29,32 @@ def as_demo(traj):
     return np.column_stack([np.linspace(0, 10, len(traj)), traj])
 
 
-def test_scene_matches_the_paper(task):
-    assert task.conditions.shape == (100, 3)
-    sc = task.scene
+def test_scene_matches_the_paper(pickplace_task):
+    assert pickplace_task.conditions.shape == (100, 3)
+    sc = pickplace_task.scene
     assert (sc.rows, sc.cols) == (10, 10)
-    corners = task.conditions[sc.generalisation_indices]
+    corners = pickplace_task.conditions[sc.generalisation_indices]
     assert len(corners) == 5
-    np.testing.assert_allclose(corners[-1, :2], task.conditions[44, :2])
-    assert len(task.frames(task.conditions[0])) == 3
-    batch = task.frame_batch(task.conditions)
-    np.testing.assert_allclose(batch.b[7, 1, :3], task.conditions[7])
+    np.testing.assert_allclose(corners[-1, :2], pickplace_task.conditions[44, :2])
+    assert len(pickplace_task.frames(pickplace_task.conditions[0])) == 3
+    batch = pickplace_task.frame_batch(pickplace_task.conditions)
+    np.testing.assert_allclose(batch.b[7, 1, :3], pickplace_task.conditions[7])
     np.testing.assert_allclose(batch.b[7, 1, 3], 0.0)  # the hand column is not moved by frames
-    assert task.start[2] > 0.3  # the start pose is well above the table
+    assert pickplace_task.start[2] > 0.3  # the start pose is well above the table
 
 
-def test_start_is_the_tool_at_the_start_configuration(task):
+def test_start_is_the_tool_at_the_start_configuration(pickplace_task):
     from tutor.robot import get_arm
 
     # the Panda's "ready" pose (tests/test_robot.py checks the same numbers)
-    np.testing.assert_allclose(task.start, [0.30702, 0.0, 0.48687], atol=1e-5)
-    p, _ = get_arm().fk(task.scene.start_configuration)
-    np.testing.assert_array_equal(task.start, p)
+    np.testing.assert_allclose(pickplace_task.start, [0.30702, 0.0, 0.48687], atol=1e-5)
+    p, _ = get_arm().fk(pickplace_task.scene.start_configuration)
+    np.testing.assert_array_equal(pickplace_task.start, p)
 
 
-def test_a_correct_carry_passes(task):
+def test_a_correct_carry_passes(pickplace_task):
     ctx = {"delta_g": 0.01, "delta_r": 0.01}
-    v = task.judge(carry(task, 5)[None], task.conditions[[5]], ctx)
+    v = pickplace_task.judge(carry(pickplace_task, 5)[None], pickplace_task.conditions[[5]], ctx)
     assert v.passed.tolist() == [True]
 
 
@@ -71,71 +66,86 @@ def test_a_correct_carry_passes(task):
         ({"dip": 20}, "went through the table at sample 21 of 200"),
     ],
 )
-def test_failure_reasons(task, kwargs, words):
+def test_failure_reasons(pickplace_task, kwargs, words):
     ctx = {"delta_g": 0.01, "delta_r": 0.01}
-    v = task.judge(carry(task, 5, **kwargs)[None], task.conditions[[5]], ctx)
+    v = pickplace_task.judge(
+        carry(pickplace_task, 5, **kwargs)[None], pickplace_task.conditions[[5]], ctx
+    )
     assert not v.passed[0] and words in v.reasons[0]
 
 
-def test_never_closing_or_opening(task):
+def test_never_closing_or_opening(pickplace_task):
     ctx = {"delta_g": 0.01, "delta_r": 0.01}
-    t = carry(task, 5)
+    t = carry(pickplace_task, 5)
     closed, opened = t.copy(), t.copy()
     closed[:, 3] = 0.0
     opened[60:, 3] = 1.0
-    assert task.judge(closed[None], task.conditions[[5]], ctx).reasons[0] == "never closed the hand"
-    assert "never opened the hand" in task.judge(opened[None], task.conditions[[5]], ctx).reasons[0]
+    assert (
+        pickplace_task.judge(closed[None], pickplace_task.conditions[[5]], ctx).reasons[0]
+        == "never closed the hand"
+    )
+    assert (
+        "never opened the hand"
+        in pickplace_task.judge(opened[None], pickplace_task.conditions[[5]], ctx).reasons[0]
+    )
 
 
-def test_through_the_tray(task):
-    t = carry(task, 5)
-    t[40, :3] = task.scene.tray_center  # inside the tray box
-    v = task.judge(t[None], task.conditions[[5]], {"delta_g": 0.01, "delta_r": 0.01})
+def test_through_the_tray(pickplace_task):
+    t = carry(pickplace_task, 5)
+    t[40, :3] = pickplace_task.scene.tray_center  # inside the tray box
+    v = pickplace_task.judge(
+        t[None], pickplace_task.conditions[[5]], {"delta_g": 0.01, "delta_r": 0.01}
+    )
     assert "hit the tray at sample 41" in v.reasons[0]
 
 
-def test_delta_rule_is_mean_plus_two_std_plus_one_mm(task):
+def test_delta_rule_is_mean_plus_two_std_plus_one_mm(pickplace_task):
     offsets = [0.001, 0.002, 0.003]
     demos = [
-        as_demo(carry(task, 5, grab_offset=(o, 0, 0), release_offset=(0, 2 * o, 0)))
+        as_demo(carry(pickplace_task, 5, grab_offset=(o, 0, 0), release_offset=(0, 2 * o, 0)))
         for o in offsets
     ]
-    ctx = task.criteria_context(demos, task.conditions[[5, 5, 5]])
+    ctx = pickplace_task.criteria_context(demos, pickplace_task.conditions[[5, 5, 5]])
     std = np.std(offsets)  # population standard deviation
     assert ctx["delta_g"] == pytest.approx(0.002 + 2 * std + 0.001)
     assert ctx["delta_r"] == pytest.approx(0.004 + 4 * std + 0.001)
 
 
-def test_wrong_plant_demo_is_left_out_of_the_delta_rule(task):
-    good = [as_demo(carry(task, 5, grab_offset=(0.001, 0, 0))) for _ in range(2)]
-    wrong = as_demo(carry(task, 6))  # grabbed plant 6 while the teacher chose plant 5
-    ctx = task.criteria_context([*good, wrong], task.conditions[[5, 5, 5]])
+def test_wrong_plant_demo_is_left_out_of_the_delta_rule(pickplace_task):
+    good = [as_demo(carry(pickplace_task, 5, grab_offset=(0.001, 0, 0))) for _ in range(2)]
+    wrong = as_demo(carry(pickplace_task, 6))  # grabbed plant 6 while the teacher chose plant 5
+    ctx = pickplace_task.criteria_context([*good, wrong], pickplace_task.conditions[[5, 5, 5]])
     assert ctx["delta_g"] == pytest.approx(0.002)
 
 
-def test_demonstrations_grab_the_chosen_plant(task):
+def test_demonstrations_grab_the_chosen_plant(pickplace_task):
     rng = np.random.default_rng(0)
     for plant in (0, 44, 99):
-        raw = task.demonstrate(plant, rng)
-        assert 8.0 < task.duration(raw) < 16.0
-        demo = task.preprocess(raw)
-        v = task.judge_demo(demo, task.conditions[plant])
+        raw = pickplace_task.demonstrate(plant, rng)
+        assert 8.0 < pickplace_task.duration(raw) < 16.0
+        demo = pickplace_task.preprocess(raw)
+        v = pickplace_task.judge_demo(demo, pickplace_task.conditions[plant])
         assert v.passed[0], v.reasons
-        np.testing.assert_allclose(task.condition_of(demo), task.conditions[plant])
+        np.testing.assert_allclose(
+            pickplace_task.condition_of(demo), pickplace_task.conditions[plant]
+        )
 
 
-def test_wrong_plant_and_sloppy_grab_are_incorrect(task):
+def test_wrong_plant_and_sloppy_grab_are_incorrect(pickplace_task):
     rng = np.random.default_rng(1)
-    wrong = task.preprocess(task.demonstrate(44, rng, mistake="wrong_plant"))
-    v = task.judge_demo(wrong, task.conditions[44])
+    wrong = pickplace_task.preprocess(pickplace_task.demonstrate(44, rng, mistake="wrong_plant"))
+    v = pickplace_task.judge_demo(wrong, pickplace_task.conditions[44])
     assert not v.passed[0] and "instead of the chosen plant (5, 5)" in v.reasons[0]
-    s = TeachingSession(task)
+    s = TeachingSession(pickplace_task)
     for p in (0, 99, 9, 90):
-        s.add_demo(task.demonstrate(p, rng), condition=task.conditions[p])
-    r = s.add_demo(task.demonstrate(44, rng, mistake="wrong_plant"), condition=task.conditions[44])
+        s.add_demo(pickplace_task.demonstrate(p, rng), condition=pickplace_task.conditions[p])
+    r = s.add_demo(
+        pickplace_task.demonstrate(44, rng, mistake="wrong_plant"),
+        condition=pickplace_task.conditions[44],
+    )
     assert INCORRECT in r.kinds and not r.demo_passed
-    sloppy = task.preprocess(task.demonstrate(44, rng, mistake="sloppy_grab"))
-    v = task.judge_demo(sloppy, task.conditions[44])
+    sloppy = pickplace_task.preprocess(pickplace_task.demonstrate(44, rng, mistake="sloppy_grab"))
+    v = pickplace_task.judge_demo(sloppy, pickplace_task.conditions[44])
     assert not v.passed[0] and "grabbed" in v.reasons[0]
 
 
@@ -152,86 +162,92 @@ def test_wrong_plant_and_sloppy_grab_are_incorrect(task):
         (lambda d: d[:, :4], "columns"),
     ],
 )
-def test_preprocess_rejects_junk(task, make, words):
-    raw = task.demonstrate(3, np.random.default_rng(2))
+def test_preprocess_rejects_junk(pickplace_task, make, words):
+    raw = pickplace_task.demonstrate(3, np.random.default_rng(2))
     with pytest.raises(InvalidDemoError, match=words):
-        task.preprocess(make(raw))
+        pickplace_task.preprocess(make(raw))
 
 
 @pytest.mark.parametrize("scale", [1e5, 1e6])
-def test_preprocess_guesses_no_unit_for_absurd_positions(task, scale):
-    raw = task.demonstrate(3, np.random.default_rng(2)) * [1, scale, scale, scale, 1]
+def test_preprocess_guesses_no_unit_for_absurd_positions(pickplace_task, scale):
+    raw = pickplace_task.demonstrate(3, np.random.default_rng(2)) * [1, scale, scale, scale, 1]
     with pytest.raises(InvalidDemoError, match="must be in metres") as err:
-        task.preprocess(raw)
+        pickplace_task.preprocess(raw)
     assert "looks like" not in str(err.value)
 
 
-def test_preprocess_accepts_metres_next_to_the_limit(task):
-    raw = task.demonstrate(3, np.random.default_rng(2))
+def test_preprocess_accepts_metres_next_to_the_limit(pickplace_task):
+    raw = pickplace_task.demonstrate(3, np.random.default_rng(2))
     raw[5, 1] = 2.9  # one wild sample, still read as metres (judged, not rejected)
-    assert task.preprocess(raw).shape == (task.scene.n_samples, 5)
+    assert pickplace_task.preprocess(raw).shape == (pickplace_task.scene.n_samples, 5)
 
 
-def test_four_corner_demos_generalise_over_the_tray(task):
+def test_four_corner_demos_generalise_over_the_tray(pickplace_task):
     rng = np.random.default_rng(0)
-    s = TeachingSession(task)
+    s = TeachingSession(pickplace_task)
     for p in (0, 99, 9, 90):
-        r = s.add_demo(task.demonstrate(p, rng), condition=task.conditions[p])
+        r = s.add_demo(pickplace_task.demonstrate(p, rng), condition=pickplace_task.conditions[p])
     assert r.efficacy >= 0.8
 
 
-def test_describe_where(task):
+def test_describe_where(pickplace_task):
     mask = np.zeros(100, bool)
     mask[:20] = True  # rows 1-2: nearest the robot
-    assert "near" in task.describe_where(mask)
-    assert task.describe_where(np.ones(100, bool)) == "all over the tray"
+    assert "near" in pickplace_task.describe_where(mask)
+    assert pickplace_task.describe_where(np.ones(100, bool)) == "all over the tray"
 
 
 # --- criterion (i): the arm's workspace X
 
 
-def test_out_of_reach_path_is_flagged_with_its_reason(task):
-    traj = carry(task, 5)
+def test_out_of_reach_path_is_flagged_with_its_reason(pickplace_task):
+    traj = carry(pickplace_task, 5)
     traj[60:70, :3] = [0.2, -0.9, 0.3]  # far to the right, beyond the arm's reach
-    v = task.judge(traj[None], task.conditions[[5]], {"delta_g": 0.01, "delta_r": 0.01})
+    v = pickplace_task.judge(
+        traj[None], pickplace_task.conditions[[5]], {"delta_g": 0.01, "delta_r": 0.01}
+    )
     assert not v.passed[0]
     assert "left the arm's reachable, collision-free workspace at sample 61" in v.reasons[0]
 
 
-def test_feasibility_options(task):
+def test_feasibility_options(pickplace_task):
     from tutor.errors import InvalidParameterError
     from tutor.robot import FullCheck, MapCheck
 
-    assert isinstance(task.feasibility, MapCheck)
-    full = PickPlaceTask(task.scene, feasibility="full")
+    assert isinstance(pickplace_task.feasibility, MapCheck)
+    full = PickPlaceTask(pickplace_task.scene, feasibility="full")
     assert isinstance(full.feasibility, FullCheck)
-    traj = carry(task, 5)[None]
+    traj = carry(pickplace_task, 5)[None]
     ctx = {"delta_g": 0.01, "delta_r": 0.01}
-    assert full.judge(traj, task.conditions[[5]], ctx).passed[0]
+    assert full.judge(traj, pickplace_task.conditions[[5]], ctx).passed[0]
     with pytest.raises(InvalidParameterError, match="'map', 'full'"):
-        PickPlaceTask(task.scene, feasibility="fast")
+        PickPlaceTask(pickplace_task.scene, feasibility="fast")
     with pytest.raises(InvalidParameterError, match="contains"):
-        PickPlaceTask(task.scene, feasibility=object())
+        PickPlaceTask(pickplace_task.scene, feasibility=object())
 
 
-def test_map_agrees_with_full_checks_on_500_realisations(task):
+def test_map_agrees_with_full_checks_on_500_realisations(pickplace_task):
     """The issue's acceptance check: map judgement vs IK + collisions along the path."""
     from tutor.robot import FullCheck, get_arm, scene_obstacles
 
-    full = FullCheck(get_arm(scene_obstacles(task.scene)))
+    full = FullCheck(get_arm(scene_obstacles(pickplace_task.scene)))
     rng = np.random.default_rng(0)
     realisations = []
     for m in (1, 2, 3, 4, 6):  # few demos: realisations swing wide, some fail
-        session = TeachingSession(task)
+        session = TeachingSession(pickplace_task)
         for p in rng.choice(100, m, replace=False):
-            session.add_demo(task.demonstrate(int(p), rng), condition=task.conditions[p])
+            session.add_demo(
+                pickplace_task.demonstrate(int(p), rng), condition=pickplace_task.conditions[p]
+            )
         realisations.append(session.realisations)
     R = np.concatenate(realisations)
     assert R.shape == (500, 200, 4)
     truth = full.path_ok(R[..., :3], R[..., 3])
-    fast = task.feasibility.path_ok(R[..., :3], R[..., 3])
+    fast = pickplace_task.feasibility.path_ok(R[..., :3], R[..., 3])
     agree = float(np.mean(truth == fast))
-    map_only = float(np.mean(truth == task.feasibility.map.path_ok(R[..., :3], R[..., 3])))
+    map_only = float(
+        np.mean(truth == pickplace_task.feasibility.map.path_ok(R[..., :3], R[..., 3]))
+    )
     assert map_only >= 0.98  # the map's grid covers where realisations go
     print(
         f"\nmap vs full IK + collisions on 500 TP-GMM realisations: {agree:.1%} agree "
@@ -244,34 +260,38 @@ def test_map_agrees_with_full_checks_on_500_realisations(task):
 # --- the simulated kinesthetic teacher (tutor.tasks.kinesthetic)
 
 
-def test_kinesthetic_demo_is_the_tasks_and_repeats_with_the_seed(task):
+def test_kinesthetic_demo_is_the_tasks_and_repeats_with_the_seed(pickplace_task):
     from tutor.tasks.kinesthetic import demonstrate
 
-    a = demonstrate(task.scene, task.start, 17, np.random.default_rng(4))
-    np.testing.assert_array_equal(a, task.demonstrate(17, np.random.default_rng(4)))
-    b = demonstrate(task.scene, task.start, 17, np.random.default_rng(5))
+    a = demonstrate(pickplace_task.scene, pickplace_task.start, 17, np.random.default_rng(4))
+    np.testing.assert_array_equal(a, pickplace_task.demonstrate(17, np.random.default_rng(4)))
+    b = demonstrate(pickplace_task.scene, pickplace_task.start, 17, np.random.default_rng(5))
     assert not np.array_equal(a[:, 1:4], b[:, 1:4])  # another person, another path
-    np.testing.assert_allclose(a[0, 1:4], task.start, atol=0.005)  # starts at the start pose
+    np.testing.assert_allclose(
+        a[0, 1:4], pickplace_task.start, atol=0.005
+    )  # starts at the start pose
     assert np.all(np.diff(a[:, 0]) > 0)  # time runs forward
     assert a[0, 4] == 0.0 and a[-1, 4] == 0.0 and a[:, 4].max() == 1.0
 
 
-def test_kinesthetic_wrong_plant_grabs_a_neighbour(task):
+def test_kinesthetic_wrong_plant_grabs_a_neighbour(pickplace_task):
     from tutor.tasks.kinesthetic import demonstrate
 
-    sc = task.scene
+    sc = pickplace_task.scene
     for corner in (0, 9, 90, 99):
         for seed in range(4):
-            raw = demonstrate(sc, task.start, corner, seed, mistake="wrong_plant")
-            grabbed = task.nearest_condition(task.condition_of(task.preprocess(raw)))
+            raw = demonstrate(sc, pickplace_task.start, corner, seed, mistake="wrong_plant")
+            grabbed = pickplace_task.nearest_condition(
+                pickplace_task.condition_of(pickplace_task.preprocess(raw))
+            )
             (r0, c0), (r1, c1) = divmod(corner, sc.cols), divmod(grabbed, sc.cols)
             assert abs(r0 - r1) + abs(c0 - c1) == 1, (corner, grabbed)  # next to it, on the tray
 
 
-def test_kinesthetic_tremor_is_about_a_millimetre(task):
+def test_kinesthetic_tremor_is_about_a_millimetre(pickplace_task):
     from tutor.tasks.kinesthetic import demonstrate
 
-    raw = demonstrate(task.scene, task.start, 44, np.random.default_rng(8))
+    raw = demonstrate(pickplace_task.scene, pickplace_task.start, 44, np.random.default_rng(8))
     pause = raw[:, 4] == raw[-1, 4]  # the final pause: the hand holds still but for tremor
     still = raw[-5:, 1:4]
     wobble = np.linalg.norm(still - still.mean(axis=0), axis=1)
@@ -289,8 +309,8 @@ def test_kinesthetic_tremor_is_about_a_millimetre(task):
         ({"plant": 3, "rate_hz": "fast"}, "rate_hz must be a positive number"),
     ],
 )
-def test_kinesthetic_bad_input_is_named(task, kwargs, words):
+def test_kinesthetic_bad_input_is_named(pickplace_task, kwargs, words):
     from tutor.errors import InvalidParameterError
 
     with pytest.raises(InvalidParameterError, match=words):
-        task.demonstrate(**kwargs)
+        pickplace_task.demonstrate(**kwargs)

@@ -7,17 +7,11 @@ import json
 import numpy as np
 import pytest
 
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.views.pickplace_app import PickPlaceTutor, compare_runs, tray_status
 
 
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
-
-
-def test_tray_shows_only_what_the_condition_shows(task, tmp_path):
-    nf = PickPlaceTutor("NF", session_file=tmp_path / "nf.json", task=task, seed=0)
+def test_tray_shows_only_what_the_condition_shows(pickplace_task, tmp_path):
+    nf = PickPlaceTutor("NF", session_file=tmp_path / "nf.json", task=pickplace_task, seed=0)
     nf.select(0)
     nf.demonstrate()
     status = tray_status(nf.run)
@@ -27,7 +21,7 @@ def test_tray_shows_only_what_the_condition_shows(task, tmp_path):
     assert "unknown" not in set(tray_status(nf.run, reveal=True))
     assert "Run over" in nf.panel.value
 
-    bf = PickPlaceTutor("BF", task=task, seed=0)
+    bf = PickPlaceTutor("BF", task=pickplace_task, seed=0)
     bf.demonstrate(44)
     shown = np.flatnonzero(tray_status(bf.run) != "unknown")
     assert set(shown) >= {0, 9, 90, 99}
@@ -35,21 +29,21 @@ def test_tray_shows_only_what_the_condition_shows(task, tmp_path):
     assert "efficacy" not in bf.panel.value and "tried 5 plants" in bf.panel.value
     assert "No failures" not in bf.panel.value and "ε" not in bf.panel.value
 
-    rf = PickPlaceTutor("RF", task=task, seed=0)
+    rf = PickPlaceTutor("RF", task=pickplace_task, seed=0)
     rf.demonstrate(12)
     assert np.flatnonzero(tray_status(rf.run) != "unknown").tolist() == [12]
     assert tray_status(rf.run)[12] in ("pass", "fail")  # the replay's outcome, not just ●
     assert "efficacy" not in rf.panel.value and "The robot tried plant (2, 3)" in rf.panel.value
 
-    practice = PickPlaceTutor("RF", task=task, seed=0, practice=True)
+    practice = PickPlaceTutor("RF", task=pickplace_task, seed=0, practice=True)
     practice.demonstrate(12)  # practice shows everything, and says it is practice
     assert "unknown" not in set(tray_status(practice.run))
     assert "efficacy" in practice.panel.value and "practice run" in practice.panel.value
     assert practice.record.practice
 
 
-def test_selected_tests_and_messages(task):
-    sf = PickPlaceTutor("SF", task=task, seed=1)
+def test_selected_tests_and_messages(pickplace_task):
+    sf = PickPlaceTutor("SF", task=pickplace_task, seed=1)
     sf.test()
     assert "demonstration before" in sf.message
     sf.demonstrate(0)
@@ -57,42 +51,42 @@ def test_selected_tests_and_messages(task):
     sf.test()
     assert "plant (6, 6)" in sf.message and "0:50" not in sf.clock.value
     assert tray_status(sf.run)[55] in ("pass", "fail")
-    rf = PickPlaceTutor("RF", task=task, seed=1)
+    rf = PickPlaceTutor("RF", task=pickplace_task, seed=1)
     rf.demonstrate(0)
     rf.test()
     assert "only after the run" in rf.message
 
 
-def test_wrong_plant_mistake_is_flagged(task):
-    t = PickPlaceTutor("RF", task=task, seed=2)
+def test_wrong_plant_mistake_is_flagged(pickplace_task):
+    t = PickPlaceTutor("RF", task=pickplace_task, seed=2)
     for p in (0, 99, 9):
         t.demonstrate(p)
     t.demonstrate(44, mistake="wrong_plant")
     assert "instead of the chosen plant (5, 5)" in t.panel.value
 
 
-def test_resume_and_corrupt_file(task, tmp_path):
+def test_resume_and_corrupt_file(pickplace_task, tmp_path):
     path = tmp_path / "bf.json"
-    t = PickPlaceTutor("BF", session_file=path, task=task, seed=3)
+    t = PickPlaceTutor("BF", session_file=path, task=pickplace_task, seed=3)
     t.demonstrate(0)
     t.demonstrate(99)
-    again = PickPlaceTutor("BF", session_file=path, task=task)
+    again = PickPlaceTutor("BF", session_file=path, task=pickplace_task)
     assert again.run.session.n_demos == 2
     assert again.run.elapsed == pytest.approx(t.run.elapsed)
-    other = PickPlaceTutor("SF", session_file=path, task=task)
+    other = PickPlaceTutor("SF", session_file=path, task=pickplace_task)
     assert other.run.session.n_demos == 0 and "Could not resume" in other.message
     bad = tmp_path / "bad.json"
     bad.write_text('{"format": "lfd-tutor-session", "version": 1, "task": {"name": "pickpl')
     before = bad.read_text()
-    fresh = PickPlaceTutor("BF", session_file=bad, task=task)
+    fresh = PickPlaceTutor("BF", session_file=bad, task=pickplace_task)
     fresh.demonstrate(5)
     assert bad.read_text() == before
 
 
-def test_compare_runs_reports_the_paper(task):
+def test_compare_runs_reports_the_paper(pickplace_task):
     runs = []
     for seed in range(3):
-        t = PickPlaceTutor("BF", task=task, seed=seed)
+        t = PickPlaceTutor("BF", task=pickplace_task, seed=seed)
         for p in (0, 99, 9, 90):
             t.demonstrate(p)
         t.finish()
@@ -101,10 +95,10 @@ def test_compare_runs_reports_the_paper(task):
     assert "Run 3 (BF)" in text and "23.5%" in text and "27.0%" in text
 
 
-def test_load_recorded_demos_keeps_the_chosen_plant(task, tmp_path):
+def test_load_recorded_demos_keeps_the_chosen_plant(pickplace_task, tmp_path):
     from tutor.demofiles import BUNDLED_DIR
 
-    rf = PickPlaceTutor("RF", session_file=tmp_path / "rf.json", task=task)
+    rf = PickPlaceTutor("RF", session_file=tmp_path / "rf.json", task=pickplace_task)
     rf.load(BUNDLED_DIR / "pickplace_wrong_plant.json")
     s = rf.run.session
     assert s.n_demos == 3 and "Added 3" in rf.message
@@ -115,16 +109,16 @@ def test_load_recorded_demos_keeps_the_chosen_plant(task, tmp_path):
     assert (tmp_path / "rf.json").exists()  # autosaved
 
 
-def test_load_bad_files_changes_nothing(task, tmp_path):
+def test_load_bad_files_changes_nothing(pickplace_task, tmp_path):
     from tutor.demofiles import BUNDLED_DIR, save_demos
 
-    bf = PickPlaceTutor("BF", task=task, seed=0)
+    bf = PickPlaceTutor("BF", task=pickplace_task, seed=0)
     bf.demonstrate(44)
     before = (bf.run.session.n_demos, bf.run.elapsed)
     maze = BUNDLED_DIR / "maze_good.json"
     bf.load(maze)
     assert "Nothing was loaded" in bf.message and "t, x, y, z, g" in bf.message
-    good = task.demonstrate(0, np.random.default_rng(0))
+    good = pickplace_task.demonstrate(0, np.random.default_rng(0))
     bad = good.copy()
     bad[:, 4] *= 2  # the hand column must be 0 .. 1
     save_demos(tmp_path / "half.csv", [good, bad], columns="txyzg")
@@ -136,21 +130,21 @@ def test_load_bad_files_changes_nothing(task, tmp_path):
     assert (bf.run.session.n_demos, bf.run.elapsed) == before
 
 
-def test_undo_keeps_the_time_spent(task):
-    bf = PickPlaceTutor("BF", task=task, seed=0)
+def test_undo_keeps_the_time_spent(pickplace_task):
+    bf = PickPlaceTutor("BF", task=pickplace_task, seed=0)
     bf.demonstrate(44)
     spent = bf.run.elapsed
     bf.undo()
     assert bf.run.session.n_demos == 0 and bf.run.elapsed == pytest.approx(spent)
 
 
-def test_upload_widget_adds_recorded_demos(task):
+def test_upload_widget_adds_recorded_demos(pickplace_task):
     import datetime
 
     from tutor.demofiles import BUNDLED_DIR
 
     data = (BUNDLED_DIR / "pickplace_corners.json").read_bytes()
-    app = PickPlaceTutor("NF", task=task)
+    app = PickPlaceTutor("NF", task=pickplace_task)
     app.upload.value = (
         {
             "name": "my corners.json",
@@ -163,10 +157,10 @@ def test_upload_widget_adds_recorded_demos(task):
     assert app.run.session.n_demos == 5 and "my corners.json" in app.message
 
 
-def test_controls_one_selected_plant_busy_button_and_mistake_reset(task, monkeypatch):
+def test_controls_one_selected_plant_busy_button_and_mistake_reset(pickplace_task, monkeypatch):
     from tutor.views import pickplace_app
 
-    app = PickPlaceTutor("BF", task=task, seed=0)
+    app = PickPlaceTutor("BF", task=pickplace_task, seed=0)
     for plant in (3, 57, 12):
         app.plant_buttons[plant].click()
     selected = [i for i, b in enumerate(app.plant_buttons) if b.layout.border.startswith("3px")]
@@ -192,10 +186,10 @@ def test_controls_one_selected_plant_busy_button_and_mistake_reset(task, monkeyp
     assert app.run.n_demos == 2
 
 
-def test_tray_map_is_laid_out_as_the_3d_camera_sees_it(task):
-    app = PickPlaceTutor("BF", task=task, seed=0)
+def test_tray_map_is_laid_out_as_the_3d_camera_sees_it(pickplace_task):
+    app = PickPlaceTutor("BF", task=pickplace_task, seed=0)
     cells = app.tray.children
-    cols = task.scene.cols
+    cols = pickplace_task.scene.cols
     assert "1" in cells[1].value and "10" in cells[cols].value  # column numbers on top
     first_row = cells[cols + 2 : 2 * cols + 2]
     assert first_row == tuple(app.plant_buttons[:cols])  # row 1, nearest the robot, on top
@@ -207,8 +201,8 @@ def test_tray_map_is_laid_out_as_the_3d_camera_sees_it(task):
     assert CAMERA_POSITION[0] > 0 and CAMERA_POSITION[1] < 0
 
 
-def test_the_run_ends_with_the_last_complete_demo_at_the_cap(task, tmp_path):
-    app = PickPlaceTutor("BF", task=task, seed=0, session_file=tmp_path / "bf.json")
+def test_the_run_ends_with_the_last_complete_demo_at_the_cap(pickplace_task, tmp_path):
+    app = PickPlaceTutor("BF", task=pickplace_task, seed=0, session_file=tmp_path / "bf.json")
     app.demonstrate(44)
     app.run.spend(app.run.remaining - 20)  # 20 s left: no demo and its 5 attempts fit
     app.demonstrate(0)

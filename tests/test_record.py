@@ -27,14 +27,13 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
+from tests.helpers import shared_maze_task, shared_pickplace_task
 from tutor.demofiles import bundled_demos
 from tutor.errors import InvalidFileError, InvalidParameterError, WrongRunError
 from tutor.framework import RunOverError, RunRecord, Trainee
 from tutor.framework import record as record_module
 from tutor.framework.record import EVENT_KINDS
-from tutor.tasks.maze import MazeTask
 from tutor.tasks.maze_run import MazeRun
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 
 SCHEMA_PATH = Path(record_module.__file__).with_name("run_record.schema.json")
@@ -43,17 +42,9 @@ VALIDATOR = jsonschema.Draft202012Validator(SCHEMA)
 
 
 # Built once and reached through functions rather than fixtures, so that hypothesis
-# reports a failing case as its steps alone.
-
-
-@functools.cache
-def _maze() -> MazeTask:
-    return MazeTask()
-
-
-@functools.cache
-def _pickplace() -> PickPlaceTask:
-    return PickPlaceTask()
+# reports a failing case as its steps alone (the tasks are the session's shared ones:
+# shared_maze_task() is the maze_task fixture's object, shared_pickplace_task() the
+# pickplace_task fixture's).
 
 
 @functools.cache
@@ -65,21 +56,11 @@ def _demos() -> tuple:
 @functools.cache
 def _donor(condition: str) -> RunRecord:
     """Another trainee's record of the same maze run (2 demos, finished)."""
-    run = MazeRun.new(condition, _maze(), trainee=Trainee.from_name("Grace"))
+    run = MazeRun.new(condition, shared_maze_task(), trainee=Trainee.from_name("Grace"))
     run.add_demo(_demos()[3])
     run.add_demo(_demos()[1])
     run.finish()
     return run.record
-
-
-@pytest.fixture(scope="module")
-def maze():
-    return _maze()
-
-
-@pytest.fixture(scope="module")
-def pickplace():
-    return _pickplace()
 
 
 @pytest.fixture(scope="module")
@@ -196,7 +177,7 @@ def _maze_step(run, step, demos, donor) -> list[str]:
     steps=st.lists(MAZE_STEPS, min_size=3, max_size=8),
 )
 def test_any_maze_run_comes_back_identical_from_its_file(condition, steps):
-    maze = _maze()
+    maze = shared_maze_task()
     run = MazeRun.new(condition, maze, trainee=Trainee.from_name("Zoë"))
     expected = ["start"]
     for step in steps:
@@ -270,7 +251,7 @@ def _pickplace_step(run, step) -> list[str]:
     steps=st.lists(PICKPLACE_STEPS, min_size=3, max_size=7),
 )
 def test_any_pickplace_run_comes_back_identical_with_its_clock(condition, steps):
-    pickplace = _pickplace()
+    pickplace = shared_pickplace_task()
     run = PickPlaceRun(condition, pickplace, trainee=Trainee.from_name("Zoë"), run=2)
     expected = ["start"]
     for step in steps:
@@ -296,10 +277,10 @@ def test_any_pickplace_run_comes_back_identical_with_its_clock(condition, steps)
 
 
 @pytest.fixture(scope="module")
-def valid(maze, demos):
+def valid(maze_task, demos):
     """A rich valid record dict: two attempts (the first reset, with an undone demo and a
     robot test), VR compliance, a finished current attempt."""
-    run = MazeRun.new("VR", maze, trainee=Trainee.from_name("Zoë"))
+    run = MazeRun.new("VR", maze_task, trainee=Trainee.from_name("Zoë"))
     run.add_demo(demos[0], chosen_by="plan")
     run.test([3, 70])
     run.add_demo(demos[2], mistake="slip")
@@ -439,41 +420,41 @@ def test_there_are_enough_corruptions():
     assert len(BOTH_REFUSE) >= 15 and len(LOADER_ONLY) >= 3
 
 
-def test_a_corrupt_run_file_is_refused_by_the_run_loader(maze, valid, tmp_path):
+def test_a_corrupt_run_file_is_refused_by_the_run_loader(maze_task, valid, tmp_path):
     path = tmp_path / "run.json"
     path.write_text(json.dumps(_corrupted(valid, _put("events.3.attempt", 7))))
     with pytest.raises(InvalidFileError, match="names attempt 8 of 2"):
-        MazeRun.load(path, maze)
+        MazeRun.load(path, maze_task)
     path.write_text(json.dumps(valid).replace('"other_seconds": 0.0', '"other_seconds": 1e999'))
     with pytest.raises(InvalidFileError, match="too large"):
-        MazeRun.load(path, maze)
+        MazeRun.load(path, maze_task)
     path.write_text(json.dumps(valid))
-    assert MazeRun.load(path, maze).record == RunRecord.from_dict(valid)
+    assert MazeRun.load(path, maze_task).record == RunRecord.from_dict(valid)
 
 
 # ------------------------------------------------------------------ history is kept
 
 
-def test_undo_events_survive_resume(maze, demos, tmp_path):
-    run = MazeRun.new("VF", maze)
+def test_undo_events_survive_resume(maze_task, demos, tmp_path):
+    run = MazeRun.new("VF", maze_task)
     for i in (0, 1, 2):
         run.add_demo(demos[i])
     taken = run.attempt.demos[2]
     run.undo()
     run.add_demo(demos[3])
-    loaded = MazeRun.load(run.save(tmp_path / "run.json"), maze)
+    loaded = MazeRun.load(run.save(tmp_path / "run.json"), maze_task)
     events = [(e.kind, e.n_demos) for e in loaded.record.events]
     assert events == [("start", 0), ("add", 1), ("add", 2), ("add", 3), ("undo", 2), ("add", 3)]
     assert loaded.attempt.undone == (taken,)
     assert loaded.attempt.demos == run.attempt.demos and loaded.n_demos == 3
-    expected = MazeRun.new("VF", maze)
+    expected = MazeRun.new("VF", maze_task)
     for i in (0, 1, 3):
         expected.add_demo(demos[i])
     assert loaded.session.latest.efficacy == expected.session.latest.efficacy
 
 
-def test_reset_keeps_the_attempt_and_restore_brings_it_back(maze, demos, tmp_path):
-    run = MazeRun.new("VR", maze)
+def test_reset_keeps_the_attempt_and_restore_brings_it_back(maze_task, demos, tmp_path):
+    run = MazeRun.new("VR", maze_task)
     run.add_demo(demos[0])
     run.add_demo(demos[4])
     first, efficacy = run.attempt, run.session.latest.efficacy
@@ -492,17 +473,17 @@ def test_reset_keeps_the_attempt_and_restore_brings_it_back(maze, demos, tmp_pat
     assert [a.ended for a in run.record.attempts] == ["reset", "restore", ""]
     last = run.record.events[-1]
     assert (last.kind, last.detail, last.attempt, last.n_demos) == ("restore", "1", 2, 2)
-    loaded = MazeRun.load(run.save(tmp_path / "run.json"), maze)
+    loaded = MazeRun.load(run.save(tmp_path / "run.json"), maze_task)
     assert loaded.record == run.record and loaded.session.latest.efficacy == efficacy
 
 
 @pytest.fixture(scope="module")
-def other_runs(maze, pickplace, demos):
+def other_runs(maze_task, pickplace_task, demos):
     """Records a VF maze run must not load: another condition, experiment, practice run."""
-    vr = MazeRun.new("VR", maze, trainee=Trainee.from_name("Grace"))
+    vr = MazeRun.new("VR", maze_task, trainee=Trainee.from_name("Grace"))
     vr.add_demo(demos[0])
-    practice = MazeRun.new("VF", maze, trainee=Trainee.from_name("Grace"), practice=True)
-    bf = PickPlaceRun("BF", pickplace, trainee=Trainee.from_name("Grace"), run=3)
+    practice = MazeRun.new("VF", maze_task, trainee=Trainee.from_name("Grace"), practice=True)
+    bf = PickPlaceRun("BF", pickplace_task, trainee=Trainee.from_name("Grace"), run=3)
     return {
         "another condition": (vr.record, "experiment 1, VR run"),
         "a practice run": (practice.record, "experiment 1, VF run (practice)"),
@@ -511,8 +492,10 @@ def other_runs(maze, pickplace, demos):
 
 
 @pytest.mark.parametrize("which", ["another condition", "a practice run", "another experiment"])
-def test_replace_with_another_run_is_refused_and_changes_nothing(maze, demos, other_runs, which):
-    run = MazeRun.new("VF", maze, trainee=Trainee.from_name("Zoë"))
+def test_replace_with_another_run_is_refused_and_changes_nothing(
+    maze_task, demos, other_runs, which
+):
+    run = MazeRun.new("VF", maze_task, trainee=Trainee.from_name("Zoë"))
     run.add_demo(demos[1])
     before, efficacy = run.record, run.session.latest.efficacy
     other, label = other_runs[which]
@@ -523,8 +506,8 @@ def test_replace_with_another_run_is_refused_and_changes_nothing(maze, demos, ot
     assert run.record == before and run.session.latest.efficacy == efficacy
 
 
-def test_replace_with_into_a_finished_run_is_refused(maze, demos, donors):
-    run = MazeRun.new("VF", maze, trainee=Trainee.from_name("Zoë"))
+def test_replace_with_into_a_finished_run_is_refused(maze_task, demos, donors):
+    run = MazeRun.new("VF", maze_task, trainee=Trainee.from_name("Zoë"))
     run.add_demo(demos[1])
     run.finish()
     before = run.record
@@ -539,8 +522,8 @@ def test_replace_with_into_a_finished_run_is_refused(maze, demos, donors):
     assert [a.ended for a in run.record.attempts] == ["reset", "load", ""]
 
 
-def test_a_same_run_load_keeps_this_trainee_and_the_old_attempt(maze, demos, donors):
-    run = MazeRun.new("NF", maze, trainee=Trainee.from_name("Zoë"))
+def test_a_same_run_load_keeps_this_trainee_and_the_old_attempt(maze_task, demos, donors):
+    run = MazeRun.new("NF", maze_task, trainee=Trainee.from_name("Zoë"))
     run.add_demo(demos[0])
     mine = run.attempt
     run.replace_with(donors["NF"], "grace.json")

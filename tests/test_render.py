@@ -14,14 +14,8 @@ from __future__ import annotations
 import pytest
 
 from tutor.errors import InvalidParameterError
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.views.scene3d import Scene3D
 from tutor.views.scene_widget import WORKING
-
-
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
 
 
 def test_both_3d_pages_build_the_viewer_with_the_render_script():
@@ -47,8 +41,8 @@ def _scene(task):
     return scene, sent
 
 
-def test_working_line_shows_at_once_and_goes_at_the_next_refresh(task):
-    scene, sent = _scene(task)
+def test_working_line_shows_at_once_and_goes_at_the_next_refresh(pickplace_task):
+    scene, sent = _scene(pickplace_task)
     scene.working()
     assert WORKING in scene._caption.value and "lfd-working" in scene._caption.value
     assert sent == [({"type": "working", "text": WORKING}, None)]
@@ -61,8 +55,8 @@ def test_working_line_shows_at_once_and_goes_at_the_next_refresh(task):
     assert sent == []  # nothing to clear, nothing sent
 
 
-def test_busy_clears_the_line_even_when_the_block_fails(task):
-    scene, sent = _scene(task)
+def test_busy_clears_the_line_even_when_the_block_fails(pickplace_task):
+    scene, sent = _scene(pickplace_task)
     with pytest.raises(RuntimeError), scene.busy("Working: testing 5 plants..."):
         assert "testing 5 plants" in scene._caption.value
         raise RuntimeError("the step failed")
@@ -74,16 +68,16 @@ def test_busy_clears_the_line_even_when_the_block_fails(task):
 
 
 @pytest.mark.parametrize("text", ["", "   ", None, 3, "x" * 201])
-def test_bad_working_text_is_a_named_error_and_changes_nothing(task, text):
-    scene, sent = _scene(task)
+def test_bad_working_text_is_a_named_error_and_changes_nothing(pickplace_task, text):
+    scene, sent = _scene(pickplace_task)
     before = scene._caption.value
     with pytest.raises(InvalidParameterError, match="working line"):
         scene.working(text)
     assert scene._caption.value == before and sent == []
 
 
-def test_working_before_the_widget_is_shown_is_harmless(task):
-    scene = Scene3D(task, mode="static", robot=False)
+def test_working_before_the_widget_is_shown_is_harmless(pickplace_task):
+    scene = Scene3D(pickplace_task, mode="static", robot=False)
     scene.working()
     scene.refresh()
     assert "lfd-working" not in scene.widget.children[0].children[1].value

@@ -19,7 +19,6 @@ import numpy as np
 import pytest
 
 from tutor.errors import InvalidParameterError
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.views import meshcat_server
 from tutor.views.meshcat_server import (
     LOOPBACK,
@@ -32,11 +31,6 @@ from tutor.views.pickplace_app import PickPlaceTutor, tray_status
 from tutor.views.scene3d import STATUS_COLOURS, Scene3D, SceneRecorder, choose_mode
 
 REPO = Path(__file__).resolve().parents[1]
-
-
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
 
 
 # --------------------------------------------------------------------------- helpers
@@ -226,14 +220,14 @@ def test_dead_live_viewer_falls_back():
 # --------------------------------------------------------------------------- the scene
 
 
-def test_headless_scene_is_static_without_a_server(task, monkeypatch, tmp_path):
+def test_headless_scene_is_static_without_a_server(pickplace_task, monkeypatch, tmp_path):
     monkeypatch.setenv("TUTOR_HEADLESS", "1")
 
     def no_server(*args, **kwargs):
         raise AssertionError("a headless Scene3D must not start a server")
 
     monkeypatch.setattr(meshcat_server, "get_server", no_server)
-    scene = Scene3D(task)
+    scene = Scene3D(pickplace_task)
     assert scene.mode == "static" and scene.recorder.live is None
     path = scene.save_html(tmp_path / "scene.html")
     text = path.read_text()
@@ -266,8 +260,8 @@ def test_mode_is_static_where_the_browser_cannot_reach_loopback(monkeypatch):
     assert choose_mode() == "static"
 
 
-def test_bad_input_is_named(task):
-    scene = Scene3D(task, mode="static", robot=False)
+def test_bad_input_is_named(pickplace_task):
+    scene = Scene3D(pickplace_task, mode="static", robot=False)
     with pytest.raises(InvalidParameterError, match="entries"):
         scene.set_status(["pass"] * 3)
     with pytest.raises(InvalidParameterError, match="unknown plant status"):
@@ -277,9 +271,9 @@ def test_bad_input_is_named(task):
     with pytest.raises(InvalidParameterError, match="shape"):
         scene.animate(np.zeros((10, 2)))
     with pytest.raises(InvalidParameterError, match="mode"):
-        Scene3D(task, mode="web")
+        Scene3D(pickplace_task, mode="web")
     with pytest.raises(InvalidParameterError, match="seconds"):
-        Scene3D(task, mode="static", seconds=0)
+        Scene3D(pickplace_task, mode="static", seconds=0)
 
 
 def _track(clip, name):
@@ -290,12 +284,12 @@ def _track(clip, name):
     return times, values, t["interpolation"]
 
 
-def test_one_realisation_animates_smoothly(task):
-    tutor = PickPlaceTutor("RF", task=task, seed=4)
+def test_one_realisation_animates_smoothly(pickplace_task):
+    tutor = PickPlaceTutor("RF", task=pickplace_task, seed=4)
     tutor.demonstrate(44)
     run = tutor.run
     path = run.session.realisations[44][:, -4:]
-    scene = Scene3D(task, mode="static")
+    scene = Scene3D(pickplace_task, mode="static")
     info = scene.animate(path, "test")
     assert info.frames == 200 and 20 <= info.fps <= 30 and 8 <= info.duration <= 12
     assert 40 <= info.keys <= 60  # 5 keys a second, not every sample
@@ -331,11 +325,11 @@ def test_one_realisation_animates_smoothly(task):
     assert shown[0] == closed[0] and np.array_equal(shown[1:], closed[switches])
 
 
-def test_replay_sends_the_same_animation_again(task):
-    scene = Scene3D(task, mode="static", robot=False)
+def test_replay_sends_the_same_animation_again(pickplace_task):
+    scene = Scene3D(pickplace_task, mode="static", robot=False)
     assert scene.replay() is False  # nothing animated yet
     sent = _open_view(scene)
-    tutor = PickPlaceTutor("RF", task=task, scene3d=scene, seed=2)
+    tutor = PickPlaceTutor("RF", task=pickplace_task, scene3d=scene, seed=2)
     tutor.demonstrate(30)
     *_, first = [c for _, b in sent for c in _frames(b[0]) if c["type"] == "set_animation"]
     assert first["animations"]
@@ -347,9 +341,9 @@ def test_replay_sends_the_same_animation_again(task):
     assert _frames(buffers[0]) == [first]  # only the animation, played again
 
 
-def test_unchanged_trails_are_not_sent_again(task):
-    scene = Scene3D(task, mode="static", robot=False)
-    tutor = PickPlaceTutor("NF", task=task, scene3d=scene, seed=3)
+def test_unchanged_trails_are_not_sent_again(pickplace_task):
+    scene = Scene3D(pickplace_task, mode="static", robot=False)
+    tutor = PickPlaceTutor("NF", task=pickplace_task, scene3d=scene, seed=3)
     tutor.demonstrate(10)
     sent = _open_view(scene)
     tutor.demonstrate(60)
@@ -359,9 +353,9 @@ def test_unchanged_trails_are_not_sent_again(task):
     assert trails == {"/meshcat/lfd/trails/demos/1", "/meshcat/lfd/trails/animated/0"}
 
 
-def test_tutor_updates_the_scene(task):
-    scene = Scene3D(task, mode="static", robot=False)
-    tutor = PickPlaceTutor("RF", task=task, scene3d=scene, seed=5)
+def test_tutor_updates_the_scene(pickplace_task):
+    scene = Scene3D(pickplace_task, mode="static", robot=False)
+    tutor = PickPlaceTutor("RF", task=pickplace_task, scene3d=scene, seed=5)
     assert scene.animation is None
     tutor.demonstrate(12)
     status = tray_status(tutor.run)
@@ -378,15 +372,17 @@ def test_tutor_updates_the_scene(task):
     sent = _open_view(scene)
     tutor.select(3)
     assert sent == []
-    nf = PickPlaceTutor("NF", task=task, scene3d=Scene3D(task, mode="static", robot=False))
+    nf = PickPlaceTutor(
+        "NF", task=pickplace_task, scene3d=Scene3D(pickplace_task, mode="static", robot=False)
+    )
     nf.demonstrate(7)
     assert nf.scene3d.animation.label.startswith("Your demonstration 1")
     assert "Animated" in nf.scene3d._caption.value
 
 
-def test_sf_scene_animates_the_plant_just_tested(task):
-    scene = Scene3D(task, mode="static", robot=False)
-    tutor = PickPlaceTutor("SF", task=task, scene3d=scene, seed=6)
+def test_sf_scene_animates_the_plant_just_tested(pickplace_task):
+    scene = Scene3D(pickplace_task, mode="static", robot=False)
+    tutor = PickPlaceTutor("SF", task=pickplace_task, scene3d=scene, seed=6)
     tutor.demonstrate(12)
     tutor.test([87])
     assert "plant (9, 8)" in scene.animation.label  # the test, not the demonstration
@@ -446,6 +442,7 @@ def _open_view(scene) -> list:
     """Pretend a browser opened the notebook viewer; returns the list of messages sent."""
     sent = []
     view = scene.widget.children[1]
+
     def send(content, buffers=None):  # the "working" line is not part of the scene
         if content.get("type") != "working":
             sent.append((content, buffers))
@@ -468,10 +465,11 @@ def _frames(gz: bytes) -> list[dict]:
     return out
 
 
-def test_notebook_viewer_gets_the_scene_once_then_changes(task):
-    scene = Scene3D(task, mode="static")
+def test_notebook_viewer_gets_the_scene_once_then_changes(pickplace_task):
+    scene = Scene3D(pickplace_task, mode="static")
     view = scene.widget.children[1]
     sent = []
+
     def send(content, buffers=None):  # the "working" line is not part of the scene
         if content.get("type") != "working":
             sent.append((content, buffers))
@@ -495,8 +493,8 @@ def test_notebook_viewer_gets_the_scene_once_then_changes(task):
     assert sent == []  # nothing new, nothing sent
 
 
-def test_live_scene_streams_to_the_loopback_server(task):
-    scene = Scene3D(task, mode="live", robot=False)
+def test_live_scene_streams_to_the_loopback_server(pickplace_task):
+    scene = Scene3D(pickplace_task, mode="live", robot=False)
     assert scene.mode == "live"
     url = scene.recorder.web_url
     assert url == get_server().web_url and url.startswith(f"http://{LOOPBACK}:")
@@ -536,7 +534,7 @@ def _render(html_path: Path, png: Path, page) -> np.ndarray:
 
 
 @pytest.mark.browser
-def test_static_export_shows_the_robot_in_chromium(task, tmp_path):
+def test_static_export_shows_the_robot_in_chromium(pickplace_task, tmp_path):
     from playwright.sync_api import sync_playwright
 
     from tests.browser.conftest import ARTIFACTS, CHROMIUM, CHROMIUM_FLAGS
@@ -544,8 +542,8 @@ def test_static_export_shows_the_robot_in_chromium(task, tmp_path):
     if not Path(CHROMIUM).exists():
         pytest.fail("Debian's chromium is missing: scripts/test.sh installs it")
     ARTIFACTS.mkdir(exist_ok=True)
-    with_robot = Scene3D(task, mode="static")
-    without = Scene3D(task, mode="static", robot=False)
+    with_robot = Scene3D(pickplace_task, mode="static")
+    without = Scene3D(pickplace_task, mode="static", robot=False)
     status = np.full(100, "unknown", dtype=object)
     status[:50] = "pass"
     for s in (with_robot, without):
@@ -614,7 +612,7 @@ def test_the_arm_is_example_robot_datas_meshes_with_fewer_triangles():
     assert all(any(p.startswith(f"/meshcat/{n}/") for p in paths) for n in meshes.node_names)
 
 
-def test_the_3d_view_shows_what_the_tray_shows(task):
+def test_the_3d_view_shows_what_the_tray_shows(pickplace_task):
     """One rule decides what a trainee may see (the run's visibility): a practice run's
     3-D view, like its tray, shows every plant's attempt after a demo; a counted BF run's
     only the batch, until it is finished."""
@@ -622,9 +620,9 @@ def test_the_3d_view_shows_what_the_tray_shows(task):
     from tutor.views.pickplace_app import tray_status
 
     for practice, counted in ((True, 100), (False, 5)):
-        run = PickPlaceRun("BF", task, practice=practice)
+        run = PickPlaceRun("BF", pickplace_task, practice=practice)
         run.demonstrate(44, rng=np.random.default_rng(0))
-        scene = Scene3D(task, mode="static")
+        scene = Scene3D(pickplace_task, mode="static")
         scene.update(run, tray_status(run))
         drawn = len(scene._trails.get("passed", [])) + len(scene._trails.get("failed", []))
         seen = int(np.isin(tray_status(run), ["pass", "fail"]).sum())

@@ -17,17 +17,12 @@ from tutor.framework.selectors import (
     normalised_space,
     select,
 )
-from tutor.tasks.pickplace import PickPlaceTask, load_scene
+from tutor.tasks.pickplace import load_scene
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.tpgmm import TPGMM, Frame, frame_disagreement, frame_views
 
 TRAY = load_scene().plant_positions  # (100, 3), index = row * 10 + col; z is constant
 CORNERS = {0, 9, 90, 99}
-
-
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
 
 
 # ---------------------------------------------------------------- a small 2-D task
@@ -140,26 +135,31 @@ def test_the_score_finds_the_gap_between_two_clusters_of_demos_where_d_alone_doe
     assert FrameDisagreement()(1, ctx).tolist() == [middle]
 
 
-def test_disagreement_on_the_tray_looks_across_a_line_of_demos(task):
-    session = TeachingSession(task, feedback="adaptive", selector="disagreement", k=2)
+def test_disagreement_on_the_tray_looks_across_a_line_of_demos(pickplace_task):
+    session = TeachingSession(pickplace_task, feedback="adaptive", selector="disagreement", k=2)
     rng = np.random.default_rng(3)
     for plant in (0, 44, 99):  # the diagonal
-        record = session.add_demo(task.demonstrate(plant, rng), condition=task.conditions[plant])
+        record = session.add_demo(
+            pickplace_task.demonstrate(plant, rng), condition=pickplace_task.conditions[plant]
+        )
     assert set(record.shown.tolist()) == {9, 90}  # the two corners off the diagonal
 
 
-def test_picks_are_kept_the_minimum_distance_apart(task):
-    session = TeachingSession(task, feedback="none")
-    session.add_demo(task.demonstrate(44, np.random.default_rng(4)), condition=task.conditions[44])
+def test_picks_are_kept_the_minimum_distance_apart(pickplace_task):
+    session = TeachingSession(pickplace_task, feedback="none")
+    session.add_demo(
+        pickplace_task.demonstrate(44, np.random.default_rng(4)),
+        condition=pickplace_task.conditions[44],
+    )
     ctx = SelectionContext(
-        conditions=task.conditions,
+        conditions=pickplace_task.conditions,
         demo_conditions=np.array(session.conditions),
         learner=session.learner,
-        frames=task.frame_batch(task.conditions),
-        times=task.times,
+        frames=pickplace_task.frame_batch(pickplace_task.conditions),
+        times=pickplace_task.times,
         realisations=session.realisations,
     )
-    X, _ = normalised_space(task.conditions)
+    X, _ = normalised_space(pickplace_task.conditions)
     for spacing in (0.3, 0.5):
         picks = FrameDisagreement(min_distance=spacing)(5, ctx)
         gaps = np.linalg.norm(X[picks][:, None] - X[picks][None], axis=-1)
@@ -219,14 +219,14 @@ def test_a_bad_k_is_refused_with_what_k_means(k):
         select("farthest", k, ctx)
 
 
-def test_bad_selectors_and_options_are_refused(task):
+def test_bad_selectors_and_options_are_refused(pickplace_task):
     ctx = SelectionContext(conditions=TRAY, demo_conditions=TRAY[[0]])
     with pytest.raises(InvalidParameterError, match="farthest, disagreement, failures, random"):
         select("kcenter", 5, ctx)
     with pytest.raises(InvalidParameterError, match="only used with feedback='adaptive'"):
-        TeachingSession(task, feedback="batch", batch=[0], k=3)
+        TeachingSession(pickplace_task, feedback="batch", batch=[0], k=3)
     with pytest.raises(InvalidParameterError, match="selector must be one of"):
-        TeachingSession(task, feedback="adaptive", selector="nearest")
+        TeachingSession(pickplace_task, feedback="adaptive", selector="nearest")
     with pytest.raises(InvalidParameterError, match="min_distance"):
         FrameDisagreement(min_distance=-1)
 
@@ -234,10 +234,11 @@ def test_bad_selectors_and_options_are_refused(task):
 # ---------------------------------------------------------------- the session and condition AF
 
 
-def test_an_adaptive_session_shows_k_picks_and_withholds_the_totals(task):
-    session = TeachingSession(task, feedback="adaptive", selector="farthest", k=4)
+def test_an_adaptive_session_shows_k_picks_and_withholds_the_totals(pickplace_task):
+    session = TeachingSession(pickplace_task, feedback="adaptive", selector="farthest", k=4)
     record = session.add_demo(
-        task.demonstrate(44, np.random.default_rng(5)), condition=task.conditions[44]
+        pickplace_task.demonstrate(44, np.random.default_rng(5)),
+        condition=pickplace_task.conditions[44],
     )
     assert record.shown.tolist()[:1] == [99] and len(record.shown) == 4
     from tutor.framework import reveal
@@ -245,15 +246,15 @@ def test_an_adaptive_session_shows_k_picks_and_withholds_the_totals(task):
     assert not reveal("adaptive", 100, record.shown).totals
 
 
-def test_af_costs_what_bf_costs(task):
-    raw = task.demonstrate(12, np.random.default_rng(6))
-    af, bf = PickPlaceRun("AF", task), PickPlaceRun("BF", task)
+def test_af_costs_what_bf_costs(pickplace_task):
+    raw = pickplace_task.demonstrate(12, np.random.default_rng(6))
+    af, bf = PickPlaceRun("AF", pickplace_task), PickPlaceRun("BF", pickplace_task)
     assert af.feedback_seconds == bf.feedback_seconds == 125.0
     af.demonstrate(12, raw=raw)
     bf.demonstrate(12, raw=raw)
     assert af.elapsed == pytest.approx(bf.elapsed)
     assert (af.selector.name, af.k) == ("disagreement", 5)
-    assert PickPlaceRun("AF", task, k=2).feedback_seconds == 50.0
+    assert PickPlaceRun("AF", pickplace_task, k=2).feedback_seconds == 50.0
     design = PickPlaceRun.protocol()
     assert design.paper_codes == ("NF", "RF", "BF", "SF")  # the paper's four, unchanged
     assert design.codes == ("NF", "RF", "BF", "SF", "AF", "HF")
@@ -261,26 +262,26 @@ def test_af_costs_what_bf_costs(task):
 
 
 @pytest.mark.parametrize("selector", ["random", "disagreement"])
-def test_an_af_run_saved_and_loaded_shows_the_same_r(task, tmp_path, selector):
-    run = PickPlaceRun("AF", task, selector=selector, rng=11)
+def test_an_af_run_saved_and_loaded_shows_the_same_r(pickplace_task, tmp_path, selector):
+    run = PickPlaceRun("AF", pickplace_task, selector=selector, rng=11)
     rng = np.random.default_rng(7)
     for plant in (44, 3, 96):
         run.demonstrate(plant, rng=rng)
     shown = [r.shown.tolist() for r in run.session.history]
     assert [list(d.shown) for d in run.attempt.demos] == shown  # stored in the record
     path = run.save(tmp_path / "af.json")
-    back = PickPlaceRun.load(path, task)  # a fresh generator: only the stored picks agree
+    back = PickPlaceRun.load(path, pickplace_task)  # a fresh generator: only the stored picks agree
     assert [r.shown.tolist() for r in back.session.history] == shown
     assert back.elapsed == pytest.approx(run.elapsed)
     if selector == "random":  # a replay that picked again would show other plants
-        again = PickPlaceRun("AF", task, selector="random", rng=12)
+        again = PickPlaceRun("AF", pickplace_task, selector="random", rng=12)
         for d in run.attempt.demos:
             again.add_demo(np.asarray(d.samples), condition=d.condition, seconds=d.seconds)
         assert [r.shown.tolist() for r in again.session.history] != shown
 
 
-def test_undo_and_remove_keep_what_was_shown(task):
-    run = PickPlaceRun("AF", task, selector="random", rng=2)
+def test_undo_and_remove_keep_what_was_shown(pickplace_task):
+    run = PickPlaceRun("AF", pickplace_task, selector="random", rng=2)
     rng = np.random.default_rng(8)
     for plant in (0, 55, 99):
         run.demonstrate(plant, rng=rng)
@@ -292,18 +293,18 @@ def test_undo_and_remove_keep_what_was_shown(task):
     assert run.elapsed == pytest.approx(spent)  # its 125 s stay spent
 
 
-def test_the_simulated_teacher_reads_af_as_bf(task):
+def test_the_simulated_teacher_reads_af_as_bf(pickplace_task):
     from tutor.teachers.pickplace import PickPlaceTeacher
     from tutor.teachers.traits import DEFAULT_POPULATION
 
     traits = DEFAULT_POPULATION.sample(np.random.default_rng(3))
-    run = PickPlaceTeacher(traits, task).teach("AF", np.random.default_rng(4))
+    run = PickPlaceTeacher(traits, pickplace_task).teach("AF", np.random.default_rng(4))
     assert run.finished and run.session.n_demos >= 1
     assert all(len(r.shown) == 5 for r in run.session.history)
-    two = PickPlaceTeacher(traits, task).teach("AF", np.random.default_rng(4), k=2)
+    two = PickPlaceTeacher(traits, pickplace_task).teach("AF", np.random.default_rng(4), k=2)
     assert all(len(r.shown) == 2 for r in two.session.history)
     with pytest.raises(InvalidParameterError, match="only for the adaptive conditions"):
-        PickPlaceTeacher(traits, task).teach("BF", 0, k=2)
+        PickPlaceTeacher(traits, pickplace_task).teach("BF", 0, k=2)
 
 
 def test_the_cohort_runs_af_only_when_asked():
@@ -336,10 +337,10 @@ def test_the_start_form_offers_af_after_the_papers_four(person):
     assert condition_from_env() == "AF"
 
 
-def test_the_tutor_shows_af_picks_on_the_tray(task):
+def test_the_tutor_shows_af_picks_on_the_tray(pickplace_task):
     from tutor.views.pickplace_app import PickPlaceTutor, tray_status
 
-    tutor = PickPlaceTutor("AF", task=task, seed=1)
+    tutor = PickPlaceTutor("AF", task=pickplace_task, seed=1)
     tutor.demonstrate(44)
     shown = tutor.run.session.latest.shown
     status = tray_status(tutor.run)
@@ -361,9 +362,20 @@ def test_the_selector_benchmark_runs_and_reports_every_selector(tmp_path):
     root = Path(__file__).resolve().parents[1]
     out = tmp_path / "bench_selectors.json"
     done = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / "bench_selectors.py"), "--repeats", "1",
-         "--sets", "1", "--out", str(out)],
-        capture_output=True, text=True, timeout=300, cwd=root,
+        [
+            sys.executable,
+            str(root / "benchmarks" / "bench_selectors.py"),
+            "--repeats",
+            "1",
+            "--sets",
+            "1",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=root,
     )
     assert done.returncode == 0, done.stderr
     assert f"written to {out}" in done.stdout

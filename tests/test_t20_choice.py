@@ -14,7 +14,6 @@ from tutor.errors import InvalidParameterError, InvalidPlanError
 from tutor.framework import RunOverError
 from tutor.framework.assignment import ClassPlan, load_plan
 from tutor.framework.record import RunRecord
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.views.hand import (
     DEFAULT_HAND,
@@ -346,11 +345,6 @@ def test_controls_step_and_the_worked_example():
 # ------------------------------------------------------------------ the cap's undo
 
 
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
-
-
 def capped(task, tmp_path):
     """A BF tutor whose second demo the 15-minute cap ended the run with."""
     app = PickPlaceTutor("BF", task=task, seed=0, session_file=tmp_path / "bf.json")
@@ -361,8 +355,8 @@ def capped(task, tmp_path):
     return app
 
 
-def test_one_undo_after_the_cap_ended_the_run(task, tmp_path):
-    app = capped(task, tmp_path)
+def test_one_undo_after_the_cap_ended_the_run(pickplace_task, tmp_path):
+    app = capped(pickplace_task, tmp_path)
     run = app.run
     assert run.cap_undo_left and run.can_undo
     used, eps_before = run.elapsed, run.session.latest.efficacy
@@ -384,12 +378,12 @@ def test_one_undo_after_the_cap_ended_the_run(task, tmp_path):
         "finish",
         "undo",
     ]
-    resumed = PickPlaceTutor("BF", task=task, session_file=app.session_file)
+    resumed = PickPlaceTutor("BF", task=pickplace_task, session_file=app.session_file)
     assert resumed.run.n_demos == 1 and not resumed.run.can_undo
 
 
-def test_no_undo_after_the_trainee_finished(task):
-    run = PickPlaceRun("RF", task)
+def test_no_undo_after_the_trainee_finished(pickplace_task):
+    run = PickPlaceRun("RF", pickplace_task)
     run.demonstrate(12, rng=np.random.default_rng(0))
     run.finish()
     assert run.attempt.stopped == "finish" and not run.can_undo
@@ -398,8 +392,8 @@ def test_no_undo_after_the_trainee_finished(task):
     assert run.n_demos == 1
 
 
-def test_a_record_with_two_undos_after_the_cap_is_refused(task, tmp_path):
-    app = capped(task, tmp_path)
+def test_a_record_with_two_undos_after_the_cap_is_refused(pickplace_task, tmp_path):
+    app = capped(pickplace_task, tmp_path)
     app.undo()
     data = app.run.record.to_dict()
     second = dict(data["events"][-1], n_demos=0)
@@ -409,8 +403,8 @@ def test_a_record_with_two_undos_after_the_cap_is_refused(task, tmp_path):
         RunRecord.from_dict(data)
 
 
-def test_after_run_tests_go_with_the_demo_taken_back(task):
-    run = PickPlaceRun("NF", task)
+def test_after_run_tests_go_with_the_demo_taken_back(pickplace_task):
+    run = PickPlaceRun("NF", pickplace_task)
     rng = np.random.default_rng(5)
     run.demonstrate(5, rng=rng)
     run.spend(run.remaining - 2.0)

@@ -8,8 +8,6 @@ from pathlib import Path
 
 import pytest
 
-from tutor.tasks.pickplace import PickPlaceTask
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from eps_own_hand import eps_after  # noqa: E402
 
@@ -17,14 +15,9 @@ from eps_own_hand import eps_after  # noqa: E402
 GUIDED_LOW = 0.67
 
 
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
-
-
 @pytest.mark.parametrize("seed", [1, 2, 4])
-def test_own_hand_eps_is_within_the_guided_range(task, seed):
-    guided = [eps_after(task, "guided", s) for s in (seed, seed + 1)]
-    own = eps_after(task, "own", seed)
+def test_own_hand_eps_is_within_the_guided_range(pickplace_task, seed):
+    guided = [eps_after(pickplace_task, "guided", s) for s in (seed, seed + 1)]
+    own = eps_after(pickplace_task, "own", seed)
     low = min(GUIDED_LOW, *guided)
     assert low <= own <= 1.0, (own, guided)

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from tutor.framework import RunOverError
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import SHORTEST_DEMO_SECONDS, PickPlaceRun
 from tutor.views.pickplace_app import PickPlaceTutor
 from tutor.views.start_pickplace import counted_runs, pick_and_place_experiment
@@ -225,13 +224,8 @@ def cap_numbers(text: str) -> dict:
     }
 
 
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
-
-
-def test_used_and_left_add_up_to_the_cap_whatever_the_fraction(task):
-    run = PickPlaceRun("BF", task)
+def test_used_and_left_add_up_to_the_cap_whatever_the_fraction(pickplace_task):
+    run = PickPlaceRun("BF", pickplace_task)
     for spent in (0.2, 0.5, 99.999, 123.4567, 0.0):
         run.spend(spent)
         state = run.clock_state()
@@ -243,8 +237,8 @@ def test_used_and_left_add_up_to_the_cap_whatever_the_fraction(task):
     assert clock_line(run.clock_text()) == (900, 900, 0)
 
 
-def test_the_cap_that_ends_a_run_names_the_demo_and_agrees_with_the_clock(task, tmp_path):
-    app = PickPlaceTutor("BF", task=task, seed=0, session_file=tmp_path / "bf.json")
+def test_the_cap_that_ends_a_run_names_the_demo_and_agrees_with_the_clock(pickplace_task, tmp_path):
+    app = PickPlaceTutor("BF", task=pickplace_task, seed=0, session_file=tmp_path / "bf.json")
     app.demonstrate(44)
     assert "lfd-cap" not in app.panel.value  # far from the cap: nothing said
     app.run.spend(app.run.remaining - 160.0)  # one demo and its 5 attempts fit, not two
@@ -260,11 +254,11 @@ def test_the_cap_that_ends_a_run_names_the_demo_and_agrees_with_the_clock(task, 
     assert app.buttons["Demonstrate"].disabled
 
 
-def test_a_refused_demo_gives_the_clock_lines_numbers(task):
+def test_a_refused_demo_gives_the_clock_lines_numbers(pickplace_task):
     rng = np.random.default_rng(3)
-    raw = task.demonstrate(44, rng)
-    seconds = task.duration(raw)
-    run = PickPlaceRun("RF", task)
+    raw = pickplace_task.demonstrate(44, rng)
+    seconds = pickplace_task.duration(raw)
+    run = PickPlaceRun("RF", pickplace_task)
     run.spend(run.cap - (seconds + 25.0) + 0.7)  # 0.7 s short of this demo and its replay
     used, cap, left = clock_line(run.clock_text())
     with pytest.raises(RunOverError) as refused:
@@ -277,12 +271,12 @@ def test_a_refused_demo_gives_the_clock_lines_numbers(task):
     assert run.n_demos == 0  # nothing changed
 
 
-def test_a_resumed_run_over_the_cap_says_so_before_finish(task, tmp_path):
-    run = PickPlaceRun("BF", task)
+def test_a_resumed_run_over_the_cap_says_so_before_finish(pickplace_task, tmp_path):
+    run = PickPlaceRun("BF", pickplace_task)
     run.demonstrate(5, rng=np.random.default_rng(4))
     run.spend(run.remaining - 100.0)  # 1:40 left: less than a demo and 5 attempts
     path = run.save(tmp_path / "run.json")
-    app = PickPlaceTutor("BF", task=task, session_file=path)
+    app = PickPlaceTutor("BF", task=pickplace_task, session_file=path)
     assert app.run.out_of_time and app.run.attempt.stopped == ""
     said = cap_numbers(app.panel.value)
     assert (said["demo"], said["kept"], said["left"]) == (2, 1, 100)
@@ -292,8 +286,8 @@ def test_a_resumed_run_over_the_cap_says_so_before_finish(task, tmp_path):
     assert app.run.attempt.stopped == "time" and "ends here" in app.panel.value
 
 
-def test_a_run_finished_early_says_nothing_of_the_cap(task):
-    app = PickPlaceTutor("NF", task=task, seed=1)
+def test_a_run_finished_early_says_nothing_of_the_cap(pickplace_task):
+    app = PickPlaceTutor("NF", task=pickplace_task, seed=1)
     app.demonstrate(12)
     app.finish()
     assert app.run.attempt.stopped == "finish" and "lfd-cap" not in app.panel.value

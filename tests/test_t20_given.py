@@ -33,22 +33,22 @@ VALIDATOR = jsonschema.Draft202012Validator(SCHEMA)
 
 
 @pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
-
-
-@pytest.fixture(scope="module")
-def mixed_run(task):
+def mixed_run(pickplace_task):
     """An NF run with an own-hand demo, a guided one with a mistake and a loaded one."""
-    run = PickPlaceRun("NF", task)
-    own = steady_hand(task, 18, rng=7)
+    run = PickPlaceRun("NF", pickplace_task)
+    own = steady_hand(pickplace_task, 18, rng=7)
     run.demonstrate(18, raw=own, given="own", setup_seconds=3.0)
     run.demonstrate(81, mistake="sloppy_grab", rng=1)
-    run.add_demos([(task.demonstrate(88, rng=2), {"condition": task.conditions[88]})], "f.json")
+    run.add_demos(
+        [(pickplace_task.demonstrate(88, rng=2), {"condition": pickplace_task.conditions[88]})],
+        "f.json",
+    )
     return run, own
 
 
-def test_given_and_the_recording_round_trip_through_the_run_file(task, mixed_run, tmp_path):
+def test_given_and_the_recording_round_trip_through_the_run_file(
+    pickplace_task, mixed_run, tmp_path
+):
     run, own = mixed_run
     demos = run.attempt.demos
     assert [d.given for d in demos] == ["own", "guided", "loaded"]
@@ -66,7 +66,7 @@ def test_given_and_the_recording_round_trip_through_the_run_file(task, mixed_run
     stored = data["attempts"][0]["demos"]
     assert [d["given"] for d in stored] == ["own", "guided", "loaded"]
     assert len(stored[0]["recording"]) == len(own) and stored[1]["recording"] is None
-    back = PickPlaceRun.load(path, task)
+    back = PickPlaceRun.load(path, pickplace_task)
     assert back.record == run.record
     assert back.attempt.demos[0].recording == demos[0].recording
     # an undone demo keeps both
@@ -74,18 +74,18 @@ def test_given_and_the_recording_round_trip_through_the_run_file(task, mixed_run
     back.undo()
     back.undo()
     assert [d.given for d in back.attempt.undone] == ["loaded", "guided", "own"]
-    again = PickPlaceRun.load(back.save(tmp_path / "undone.json"), task)
+    again = PickPlaceRun.load(back.save(tmp_path / "undone.json"), pickplace_task)
     assert again.attempt.undone[-1].recording == demos[0].recording
 
 
-def test_an_old_record_without_the_fields_still_reads(task, mixed_run):
+def test_an_old_record_without_the_fields_still_reads(pickplace_task, mixed_run):
     run, _ = mixed_run
     data = run.to_dict()
     for attempt in data["attempts"]:
         for demo in attempt["demos"]:
             del demo["given"], demo["recording"]
     VALIDATOR.validate(data)
-    old = PickPlaceRun.from_dict(data, task)
+    old = PickPlaceRun.from_dict(data, pickplace_task)
     assert [d.given for d in old.attempt.demos] == ["", "", ""]
     assert all(d.recording is None for d in old.attempt.demos)
     assert old.n_demos == 3
@@ -105,19 +105,21 @@ def test_an_old_record_without_the_fields_still_reads(task, mixed_run):
         ("recording", [[0.0]] * (MAX_RECORDING_SAMPLES + 1), "more than the", True),
     ],
 )
-def test_a_hostile_given_or_recording_is_refused(task, mixed_run, field, value, words, schema_says):
+def test_a_hostile_given_or_recording_is_refused(
+    pickplace_task, mixed_run, field, value, words, schema_says
+):
     run, _ = mixed_run
     data = run.to_dict()
     data["attempts"][0]["demos"][0][field] = value
     with pytest.raises(InvalidFileError, match="demos\\[0\\]") as info:
-        PickPlaceRun.from_dict(data, task)
+        PickPlaceRun.from_dict(data, pickplace_task)
     assert words in str(info.value)
     assert VALIDATOR.is_valid(data) is not schema_says
 
 
-def test_add_demo_checks_given_and_recording(task):
-    run = PickPlaceRun("NF", task)
-    raw = task.demonstrate(3, rng=0)
+def test_add_demo_checks_given_and_recording(pickplace_task):
+    run = PickPlaceRun("NF", pickplace_task)
+    raw = pickplace_task.demonstrate(3, rng=0)
     for options in (
         {"given": "hand"},
         {"given": None},
@@ -132,7 +134,7 @@ def test_add_demo_checks_given_and_recording(task):
     assert run.attempt.demos[0].recording == round_recording(raw)
 
 
-def test_every_way_of_giving_a_demo_says_so(task, layout):
+def test_every_way_of_giving_a_demo_says_so(pickplace_task, layout):
     maze = MazeTask()
     drawn = MazeRun.new("NF", maze)
     drawn.add_demo(layout.reference_path(layout.sample_starts(1, np.random.default_rng(0))[0]))
@@ -148,10 +150,10 @@ def test_every_way_of_giving_a_demo_says_so(task, layout):
     assert set(HOW_GIVEN) == {"own", "guided", "loaded", "drawn", "simulated"}
 
 
-def test_a_demo_record_equals_itself_after_json(task):
-    raw = steady_hand(task, 11, rng=0)
+def test_a_demo_record_equals_itself_after_json(pickplace_task):
+    raw = steady_hand(pickplace_task, 11, rng=0)
     demo = Demo(samples=((0.0, 1.0),), given="own", recording=round_recording(raw))
     text = json.dumps(demo.to_dict())
     assert Demo.from_dict(json.loads(text), "demo") == demo
-    rec = RunRecord.from_dict(PickPlaceRun("SF", task).to_dict())
+    rec = RunRecord.from_dict(PickPlaceRun("SF", pickplace_task).to_dict())
     assert rec.current.demos == ()

@@ -13,26 +13,22 @@ import pytest
 from tutor.errors import InvalidPayloadError
 from tutor.payloads import MAX_GUIDE_SAMPLES, check_guide_end, check_guide_move
 from tutor.robot.follow import HandFollower, guide_limits
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.views.scene3d import Scene3D
 from tutor.views.scene_guide import GuideEnd
 
 
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
-
-
 @pytest.fixture
-def guided(task):
+def guided(pickplace_task):
     """A static scene whose view was opened, guiding; (scene, sent, ends, cancels)."""
-    scene = Scene3D(task, mode="static")
+    scene = Scene3D(pickplace_task, mode="static")
     view = scene.widget.children[1]
     sent = []
     view.send = lambda content, buffers=None: sent.append((content, buffers))
     scene._on_view_msg(view, {"type": "hello", "id": "v1"}, [])
     ends, cancels = [], []
-    scene.start_guide(HandFollower.for_scene(task.scene), ends.append, lambda: cancels.append(1))
+    scene.start_guide(
+        HandFollower.for_scene(pickplace_task.scene), ends.append, lambda: cancels.append(1)
+    )
     return scene, sent, ends, cancels
 
 
@@ -49,17 +45,17 @@ def _recording(n=40, start=(0.4, 0.0, 0.3)):
     return raw
 
 
-def test_start_arms_the_page_with_the_handle_box_and_the_links(guided, task):
+def test_start_arms_the_page_with_the_handle_box_and_the_links(guided, pickplace_task):
     scene, sent, _, _ = guided
     assert scene.guiding
     ((start, _),) = _guide_sent(sent, "start")
     assert start["limits"] == {
-        k: [float(v) for v in lo_hi] for k, lo_hi in guide_limits(task.scene).items()
+        k: [float(v) for v in lo_hi] for k, lo_hi in guide_limits(pickplace_task.scene).items()
     }
     assert len(start["links"]) == 11 and start["links"][0].startswith("/meshcat/robot/visuals/")
     assert start["hand"] == "/meshcat/lfd/hand"
     assert start["limits"]["z"][0] > start["table"]  # the handle stays above the table
-    assert np.allclose(start["start"], HandFollower.for_scene(task.scene).state.position)
+    assert np.allclose(start["start"], HandFollower.for_scene(pickplace_task.scene).state.position)
 
 
 def test_a_move_steps_the_arm_and_the_answer_carries_the_links(guided):
@@ -218,8 +214,8 @@ def test_validators_return_what_the_kernel_uses():
     got.flags.writeable = True  # its own copy, not a view of the message's buffer
 
 
-def test_the_live_view_is_a_widget_on_the_live_page(task):
-    scene = Scene3D(task, mode="live", robot=False)
+def test_the_live_view_is_a_widget_on_the_live_page(pickplace_task):
+    scene = Scene3D(pickplace_task, mode="live", robot=False)
     if scene.mode != "live":
         pytest.skip(scene.message)
     view = scene.widget.children[1]

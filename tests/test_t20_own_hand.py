@@ -15,23 +15,19 @@ import re
 import numpy as np
 import pytest
 
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.recording import steady_hand
 from tutor.views.pickplace_app import CANCEL_GUIDE, GUIDE, PickPlaceTutor
 from tutor.views.scene3d import Scene3D
 
 
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
-
-
 @pytest.fixture
-def own(task, monkeypatch, tmp_path):
+def own(pickplace_task, monkeypatch, tmp_path):
     monkeypatch.delenv("TUTOR_HAND", raising=False)
-    scene = Scene3D(task=task, mode="static")
+    scene = Scene3D(task=pickplace_task, mode="static")
     assert scene.widget is not None  # the view as a browser would have it
-    return PickPlaceTutor("RF", task=task, scene3d=scene, seed=3, session_file=tmp_path / "rf.json")
+    return PickPlaceTutor(
+        "RF", task=pickplace_task, scene3d=scene, seed=3, session_file=tmp_path / "rf.json"
+    )
 
 
 def _end(tutor, raw, setup=1.5):
@@ -51,19 +47,19 @@ def test_the_own_hand_is_the_default_and_has_no_mistake_menu(own):
     assert "Enter" in own.how.value and "kbd" in own.how.value
 
 
-def test_a_guided_demonstration_counts_its_duration_and_setup(own, task):
+def test_a_guided_demonstration_counts_its_duration_and_setup(own, pickplace_task):
     own.select(45)
     own.guide()
     assert own.guiding and own.buttons[GUIDE].description == CANCEL_GUIDE
     assert own.buttons["Undo"].disabled and own.buttons["Finish run"].disabled
-    raw = steady_hand(task, 45, np.random.default_rng(0))
+    raw = steady_hand(pickplace_task, 45, np.random.default_rng(0))
     before = own.run.elapsed
     _end(own, raw, setup=2.5)
     assert not own.guiding and own.run.n_demos == 1
     demo = own.run.attempt.demos[-1]
     assert demo.given == "own"
     np.testing.assert_allclose(np.asarray(demo.recording), raw, atol=6e-5)  # kept to 0.1 mm
-    assert demo.condition == tuple(task.conditions[45])
+    assert demo.condition == tuple(pickplace_task.conditions[45])
     spent = own.run.elapsed - before
     duration = raw[-1, 0] - raw[0, 0]
     # the demo, its setup and RF's one replay (25 s)
@@ -103,11 +99,13 @@ def test_the_page_cancelling_ends_guiding_without_a_demo(own):
     ],
     ids=["nan", "never-closes", "never-opens", "one-sample", "jump", "out-of-reach", "20-min"],
 )
-def test_a_recording_the_tutor_cannot_use_is_refused_and_nothing_changes(own, task, spoil, words):
+def test_a_recording_the_tutor_cannot_use_is_refused_and_nothing_changes(
+    own, pickplace_task, spoil, words
+):
     own.guide_as_steady_hand(30)
     before = _state(own)
     saved = own.session_file.read_bytes()
-    raw = steady_hand(task, 31, np.random.default_rng(1))
+    raw = steady_hand(pickplace_task, 31, np.random.default_rng(1))
     own.select(31)
     own.guide()
     _end(own, spoil(raw))
@@ -116,8 +114,8 @@ def test_a_recording_the_tutor_cannot_use_is_refused_and_nothing_changes(own, ta
     assert re.search(words, own.message, re.I), own.message
 
 
-def test_a_recording_that_does_not_fit_the_clock_is_refused(own, task):
-    raw = steady_hand(task, 50, np.random.default_rng(2))
+def test_a_recording_that_does_not_fit_the_clock_is_refused(own, pickplace_task):
+    raw = steady_hand(pickplace_task, 50, np.random.default_rng(2))
     own.run.spend(own.run.cap - 30.0)  # less than the demo and RF's replay need
     before = _state(own)
     own.select(50)
@@ -144,25 +142,25 @@ def test_hostile_messages_from_the_page_do_not_raise(own):
     assert own.run.n_demos == 0
 
 
-def test_the_guided_hand_by_environment_and_without_a_view(task, monkeypatch):
+def test_the_guided_hand_by_environment_and_without_a_view(pickplace_task, monkeypatch):
     monkeypatch.setenv("TUTOR_HAND", "guided")
-    scene = Scene3D(task=task, mode="static")
-    guided = PickPlaceTutor("BF", task=task, scene3d=scene, seed=0)
+    scene = Scene3D(task=pickplace_task, mode="static")
+    guided = PickPlaceTutor("BF", task=pickplace_task, scene3d=scene, seed=0)
     assert guided.hand == "guided"
     row = guided.demo_row.children
     assert guided.buttons["Demonstrate"] in row and guided.mistake in row
     guided.demonstrate(44)
     assert guided.run.attempt.demos[-1].given == "guided"
     monkeypatch.delenv("TUTOR_HAND")
-    bare = PickPlaceTutor("NF", task=task, hand="own")
+    bare = PickPlaceTutor("NF", task=pickplace_task, hand="own")
     assert bare.hand == "guided" and "Demonstrate" in bare.message
 
 
-def test_autoplay_guides_with_a_steady_hand_when_headless(task, monkeypatch):
+def test_autoplay_guides_with_a_steady_hand_when_headless(pickplace_task, monkeypatch):
     monkeypatch.setenv("TUTOR_HEADLESS", "1")
     monkeypatch.delenv("TUTOR_HAND", raising=False)
-    scene = Scene3D(task=task, mode="static")
-    tutor = PickPlaceTutor("NF", task=task, scene3d=scene, seed=1)
+    scene = Scene3D(task=pickplace_task, mode="static")
+    tutor = PickPlaceTutor("NF", task=pickplace_task, scene3d=scene, seed=1)
     tutor.autoplay([11, 45, 88])
     assert tutor.run.finished and tutor.run.n_demos == 3
     assert {d.given for d in tutor.run.attempt.demos} == {"own"}

@@ -13,7 +13,6 @@ from hypothesis import strategies as st
 
 from tutor.errors import InvalidDemoError, InvalidParameterError, InvalidRecordingError
 from tutor.limits import MAX_RECORDING_SAMPLES, MAX_RECORDING_SECONDS
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.tasks.recording import MAX_JUMP, check_recording, steady_hand
 
@@ -21,20 +20,15 @@ PLANT = 45
 
 
 @pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
+def good(pickplace_task):
+    return steady_hand(pickplace_task, PLANT, rng=3)
 
 
-@pytest.fixture(scope="module")
-def good(task):
-    return steady_hand(task, PLANT, rng=3)
-
-
-def test_the_scripted_hand_is_a_recording_a_person_could_make(task):
+def test_the_scripted_hand_is_a_recording_a_person_could_make(pickplace_task):
     for plant in (0, 9, 11, 45, 90, 99):
         for seed in range(3):
-            raw = steady_hand(task, plant, rng=seed)
-            checked = check_recording(raw, task.scene)
+            raw = steady_hand(pickplace_task, plant, rng=seed)
+            checked = check_recording(raw, pickplace_task.scene)
             np.testing.assert_array_equal(checked, raw)
             t, xyz, g = raw[:, 0], raw[:, 1:4], raw[:, 4]
             assert t[0] == 0 and np.allclose(np.diff(t), 1 / 40)
@@ -42,22 +36,22 @@ def test_the_scripted_hand_is_a_recording_a_person_could_make(task):
             speed = np.linalg.norm(np.diff(xyz, axis=0), axis=1) * 40
             assert 0.1 < speed.max() < 1.5  # a hand's peak speed, not a jump
             assert set(np.unique(g)) == {0.0, 1.0}
-            demo = task.preprocess(raw)
-            verdict = task.judge_demo(demo, task.conditions[plant])
+            demo = pickplace_task.preprocess(raw)
+            verdict = pickplace_task.judge_demo(demo, pickplace_task.conditions[plant])
             assert verdict.passed[0], verdict.reasons
-            assert task.nearest_condition(task.condition_of(demo)) == plant
-    a, b = steady_hand(task, 45, rng=1), steady_hand(task, 45, rng=2)
+            assert pickplace_task.nearest_condition(pickplace_task.condition_of(demo)) == plant
+    a, b = steady_hand(pickplace_task, 45, rng=1), steady_hand(pickplace_task, 45, rng=2)
     assert a.shape != b.shape or not np.allclose(a, b)  # people differ
-    np.testing.assert_array_equal(steady_hand(task, 45, rng=1), a)  # a seed is a person
+    np.testing.assert_array_equal(steady_hand(pickplace_task, 45, rng=1), a)  # a seed is a person
 
 
-def test_the_scripted_hand_refuses_what_is_not_a_plant_or_rate(task):
+def test_the_scripted_hand_refuses_what_is_not_a_plant_or_rate(pickplace_task):
     for plant in (-1, 100, 2.5, "3", True):
         with pytest.raises(InvalidParameterError):
-            steady_hand(task, plant)
+            steady_hand(pickplace_task, plant)
     for rate in (0, -5, np.nan, "fast", 1e6):
         with pytest.raises(InvalidParameterError):
-            steady_hand(task, 3, rate_hz=rate)
+            steady_hand(pickplace_task, 3, rate_hz=rate)
 
 
 def _hostile(good):
@@ -111,8 +105,8 @@ def _hostile(good):
     return out
 
 
-def test_each_hostile_recording_is_refused_and_the_run_is_unchanged(task, good, tmp_path):
-    run = PickPlaceRun("RF", task)
+def test_each_hostile_recording_is_refused_and_the_run_is_unchanged(pickplace_task, good, tmp_path):
+    run = PickPlaceRun("RF", pickplace_task)
     run.demonstrate(PLANT, raw=good, given="own", setup_seconds=4.0)
     before_file = run.save(tmp_path / "before.json")
     before = (run.record, run.elapsed, run.session.n_demos, len(run.record.events))
@@ -126,8 +120,8 @@ def test_each_hostile_recording_is_refused_and_the_run_is_unchanged(task, good, 
         assert after_file.read_bytes() == before_file.read_bytes(), name
 
 
-def test_an_own_hand_demo_needs_its_recording_and_takes_no_mistake(task, good):
-    run = PickPlaceRun("NF", task)
+def test_an_own_hand_demo_needs_its_recording_and_takes_no_mistake(pickplace_task, good):
+    run = PickPlaceRun("NF", pickplace_task)
     for options in (
         {"given": "own"},
         {"given": "own", "raw": good, "mistake": "wrong_plant"},
@@ -142,8 +136,8 @@ def test_an_own_hand_demo_needs_its_recording_and_takes_no_mistake(task, good):
     assert run.n_demos == 0 and run.elapsed == 0.0 and len(run.record.events) == 1
 
 
-def test_an_own_hand_demo_costs_its_duration_and_set_up_time(task, good):
-    run = PickPlaceRun("BF", task)
+def test_an_own_hand_demo_costs_its_duration_and_set_up_time(pickplace_task, good):
+    run = PickPlaceRun("BF", pickplace_task)
     rec = run.demonstrate(PLANT, raw=good, given="own", setup_seconds=7.5)
     demo = run.attempt.demos[-1]
     duration = good[-1, 0] - good[0, 0]
@@ -157,19 +151,19 @@ def test_an_own_hand_demo_costs_its_duration_and_set_up_time(task, good):
     assert guided is run.session.latest
 
 
-def test_a_grab_elsewhere_is_a_real_demonstration_error(task):
+def test_a_grab_elsewhere_is_a_real_demonstration_error(pickplace_task):
     """The plant selected before guiding is the plant meant: an own-hand demo that grabs
     a neighbour is kept, and judged as a wrong-plant demo."""
-    raw = steady_hand(task, PLANT + 1, rng=5)
-    run = PickPlaceRun("NF", task)
+    raw = steady_hand(pickplace_task, PLANT + 1, rng=5)
+    run = PickPlaceRun("NF", pickplace_task)
     run.demonstrate(PLANT, raw=raw, given="own")
     demo = np.asarray(run.attempt.demos[-1].samples)
-    verdict = task.judge_demo(demo, task.conditions[PLANT])
+    verdict = pickplace_task.judge_demo(demo, pickplace_task.conditions[PLANT])
     assert not verdict.passed[0] and "instead of the chosen" in verdict.reasons[0]
 
 
-def test_a_refused_demo_that_would_pass_the_cap_changes_nothing(task, good):
-    run = PickPlaceRun("NF", task)
+def test_a_refused_demo_that_would_pass_the_cap_changes_nothing(pickplace_task, good):
+    run = PickPlaceRun("NF", pickplace_task)
     run.demonstrate(PLANT, raw=good, given="own")
     before = run.record
     with pytest.raises(Exception, match="not enough"):
@@ -185,7 +179,7 @@ def test_a_refused_demo_that_would_pass_the_cap_changes_nothing(task, good):
     where=st.floats(0.0, 1.0),
     size=st.floats(1.01, 100.0),
 )
-def test_any_corrupted_sample_is_named(task, good, kind, where, size):
+def test_any_corrupted_sample_is_named(pickplace_task, good, kind, where, size):
     raw = good.copy()
     k = 1 + int(where * (len(raw) - 3))
     if kind == "nan":
@@ -200,7 +194,7 @@ def test_any_corrupted_sample_is_named(task, good, kind, where, size):
         raw[k, 1:4] = [0.0, 0.9, 0.12 + 0.7 * min(size, 1.5)]
         raw[k - 1, 1:4] = raw[k + 1, 1:4] = raw[k, 1:4]
     with pytest.raises(InvalidRecordingError) as info:
-        check_recording(raw, task.scene)
+        check_recording(raw, pickplace_task.scene)
     assert "sample" in str(info.value)
 
 

@@ -19,7 +19,6 @@ import pytest
 
 from tests.test_scene3d import _frames  # the notebook viewer's recorded frames
 from tutor.errors import InvalidParameterError
-from tutor.tasks.pickplace import PickPlaceTask
 from tutor.views.meshcat_recorder import SceneRecorder
 from tutor.views.meshcat_server import get_server, visualizer
 from tutor.views.pickplace_app import PickPlaceTutor
@@ -27,11 +26,6 @@ from tutor.views.scene3d import Scene3D
 
 #: the plant each of the three runs demonstrates
 PLANTS = (12, 47, 83)
-
-
-@pytest.fixture(scope="module")
-def task():
-    return PickPlaceTask()
 
 
 def _page_commands(text: str) -> list[dict]:
@@ -79,8 +73,8 @@ def _recorded(scene: Scene3D) -> list[dict]:
     return [umsgpack.unpackb(packed) for _, _, packed in scene.recorder.commands()]
 
 
-def test_three_live_scenes_have_their_own_address_and_tree(task):
-    scenes = [Scene3D(task, mode="live", robot=False) for _ in range(3)]
+def test_three_live_scenes_have_their_own_address_and_tree(pickplace_task):
+    scenes = [Scene3D(pickplace_task, mode="live", robot=False) for _ in range(3)]
     assert all(s.mode == "live" for s in scenes)
     ids = {s.scene_id for s in scenes}
     assert len(ids) == 3
@@ -91,7 +85,7 @@ def test_three_live_scenes_have_their_own_address_and_tree(task):
         with urllib.request.urlopen(page, timeout=10) as reply:
             assert b"lfd-ws" in reply.read()
     tutors = [
-        PickPlaceTutor("RF", task=task, scene3d=s, seed=k, run=k + 1)
+        PickPlaceTutor("RF", task=pickplace_task, scene3d=s, seed=k, run=k + 1)
         for k, s in enumerate(scenes)
     ]
     held = []
@@ -106,8 +100,8 @@ def test_three_live_scenes_have_their_own_address_and_tree(task):
     trails = [_demo_trail(h) for h in held]
     anims = [_animation(h) for h in held]
     for k, plant in enumerate(PLANTS):
-        mine = _near(trails[k], task, plant)
-        others = [_near(trails[k], task, p) for p in PLANTS if p != plant]
+        mine = _near(trails[k], pickplace_task, plant)
+        others = [_near(trails[k], pickplace_task, p) for p in PLANTS if p != plant]
         assert mine < min(others), (k, mine, others)
         assert anims[k] is not None and anims[k] == _animation(_recorded(scenes[k]))
     assert anims[0] != anims[1] != anims[2] != anims[0]
@@ -117,10 +111,10 @@ def test_three_live_scenes_have_their_own_address_and_tree(task):
     assert _served(scenes[1]) == held[1] and _served(scenes[2]) == held[2]
 
 
-def test_a_page_gets_its_own_scene_and_its_changes_only(task):
+def test_a_page_gets_its_own_scene_and_its_changes_only(pickplace_task):
     from tornado.websocket import websocket_connect
 
-    a, b = (Scene3D(task, mode="live", robot=False) for _ in range(2))
+    a, b = (Scene3D(pickplace_task, mode="live", robot=False) for _ in range(2))
     port = get_server().port
 
     async def listen():
@@ -155,10 +149,10 @@ async def _next(ws, timeout: float):
         return None
 
 
-def test_meshcat_own_scene_and_bad_scene_ids(task):
+def test_meshcat_own_scene_and_bad_scene_ids(pickplace_task):
     import meshcat.geometry as mg
 
-    scene = Scene3D(task, mode="live", robot=False)
+    scene = Scene3D(pickplace_task, mode="live", robot=False)
     vis = visualizer()  # meshcat's own commands (three frames) go to meshcat's scene
     vis["t20/box"].set_object(mg.Box([0.1, 0.1, 0.1]))
     own_paths = {c.get("path") for c in _page_commands(vis.static_html())}
@@ -178,14 +172,15 @@ def test_meshcat_own_scene_and_bad_scene_ids(task):
             SceneRecorder(scene_id=bad)
 
 
-def test_three_notebook_viewers_keep_their_own_scene(task):
+def test_three_notebook_viewers_keep_their_own_scene(pickplace_task):
     """The notebook viewer (no server): each run's view gets its own recording, and a
     later run's demo sends nothing to an earlier run's view."""
-    scenes = [Scene3D(task, mode="static", robot=False) for _ in range(3)]
+    scenes = [Scene3D(pickplace_task, mode="static", robot=False) for _ in range(3)]
     sent = []
     for s in scenes:
         view = s.widget.children[1]
         box: list = []
+
         def send(content, buffers=None, box=box):  # the scene's messages, not the working line
             if content.get("type") != "working":
                 box.append((content, buffers))
@@ -195,7 +190,7 @@ def test_three_notebook_viewers_keep_their_own_scene(task):
         box.clear()
         sent.append(box)
     tutors = [
-        PickPlaceTutor("RF", task=task, scene3d=s, seed=k, run=k + 1)
+        PickPlaceTutor("RF", task=pickplace_task, scene3d=s, seed=k, run=k + 1)
         for k, s in enumerate(scenes)
     ]
     held = []

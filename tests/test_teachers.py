@@ -12,7 +12,6 @@ import pandas as pd
 import pytest
 
 from tutor.errors import InvalidParameterError
-from tutor.tasks.maze import MazeTask
 from tutor.tasks.maze_rules import advise_from
 from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import PickPlaceRun
@@ -43,11 +42,6 @@ BASE = TeacherTraits(
 
 def traits(**kw) -> TeacherTraits:
     return dataclasses.replace(BASE, **kw)
-
-
-@pytest.fixture(scope="module")
-def maze():
-    return MazeTask()
 
 
 @pytest.fixture(scope="module")
@@ -179,17 +173,19 @@ def test_plan_weighing_places_spreads_demos_out():
 # --------------------------------------------------------------------------- maze teachers
 
 
-def test_nf_maze_teacher_stops_at_its_prior(maze):
+def test_nf_maze_teacher_stops_at_its_prior(maze_task):
     for enough in (2, 5):
-        run = MazeTeacher(traits(enough_maze=enough), maze).teach("NF", np.random.default_rng(1))
+        run = MazeTeacher(traits(enough_maze=enough), maze_task).teach(
+            "NF", np.random.default_rng(1)
+        )
         assert run.n_demos == enough and run.attempt.n_demos == enough and run.finished
         assert run.attempt.stopped == "satisfied"
         assert {d.chosen_by for d in run.attempt.demos} == {"plan"}
         assert all(len(r.shown) == 0 for r in run.session.history)  # r is empty
 
 
-def test_vf_maze_teacher_aims_at_red(maze):
-    teacher = MazeTeacher(traits(enough_maze=2, aim_sd=0.01), maze)
+def test_vf_maze_teacher_aims_at_red(maze_task):
+    teacher = MazeTeacher(traits(enough_maze=2, aim_sd=0.01), maze_task)
     run = teacher.teach("VF", np.random.default_rng(3))
     s = run.session
     targets = [d.chosen_by for d in run.attempt.demos]
@@ -198,30 +194,30 @@ def test_vf_maze_teacher_aims_at_red(maze):
         if why != "red":
             continue
         before = s.history[k - 1]
-        start = maze.condition_of(s.demos[k])
-        gap = np.linalg.norm(maze.conditions[~before.passed] - start, axis=1).min()
+        start = maze_task.condition_of(s.demos[k])
+        gap = np.linalg.norm(maze_task.conditions[~before.passed] - start, axis=1).min()
         assert gap <= 0.02, f"demo {k + 1} started {gap:.3f} m from the nearest red start"
     # it stops on what it sees, not on its prior of 2 demos
     assert s.latest.efficacy >= 0.9 or run.attempt.stopped == "patience"
 
 
-def test_vr_maze_teacher_follows_the_rules(maze):
-    run = MazeTeacher(traits(), maze).teach("VR", np.random.default_rng(5))
+def test_vr_maze_teacher_follows_the_rules(maze_task):
+    run = MazeTeacher(traits(), maze_task).teach("VR", np.random.default_rng(5))
     assert run.compliance and all(run.compliance)
     assert len(run.compliance) == run.n_demos  # every demo's compliance is in the record
     assert all(d.chosen_by.startswith("rule ") for d in run.attempt.demos)
     s = run.session
     # replay the rules: demo 2 starts within 4 cm of demo 1 (rule 2)
     assert [d.chosen_by for d in run.attempt.demos[:2]] == ["rule 1", "rule 2"]
-    first = maze.condition_of(s.demos[0])
-    advice = advise_from(maze, s.history[0].passed, first)
+    first = maze_task.condition_of(s.demos[0])
+    advice = advise_from(maze_task, s.history[0].passed, first)
     assert advice.rule == 2  # one demo cannot surround its start with green
-    assert np.linalg.norm(maze.condition_of(s.demos[1]) - first) <= advice.radius + 1e-9
+    assert np.linalg.norm(maze_task.condition_of(s.demos[1]) - first) <= advice.radius + 1e-9
 
 
-def test_maze_teacher_same_traits_in_every_condition(maze):
+def test_maze_teacher_same_traits_in_every_condition(maze_task):
     person = traits(enough_maze=3, patience=6, motor_noise=0.002)
-    teacher = MazeTeacher(person, maze)
+    teacher = MazeTeacher(person, maze_task)
     runs = {c: teacher.teach(c, np.random.default_rng(11)) for c in ("NF", "VF", "VR")}
     assert all(run.condition == c for c, run in runs.items())
     assert teacher.traits == person  # teaching changes no trait
@@ -231,7 +227,7 @@ def test_maze_teacher_same_traits_in_every_condition(maze):
     assert all(run.n_demos <= person.patience for run in runs.values())
     firsts = {c: run.attempt.demos[0].samples for c, run in runs.items()}
     assert firsts["NF"] == firsts["VF"] == firsts["VR"]
-    again = MazeTeacher(person, maze).teach("VF", np.random.default_rng(11))
+    again = MazeTeacher(person, maze_task).teach("VF", np.random.default_rng(11))
     assert again.attempt.demos[0].samples == firsts["VF"]
     with pytest.raises(InvalidParameterError, match="NF, VF, VR"):
         teacher.teach("BF", np.random.default_rng(0))
@@ -256,13 +252,13 @@ def test_cohort_teacher_keeps_its_traits_in_every_run(experiment, runs):
     assert not tables[0].iloc[0].equals(tables[1].iloc[0])
 
 
-def test_maze_slip_makes_an_incorrect_demo(maze):
-    t = MazeTeacher(traits(), maze)
+def test_maze_slip_makes_an_incorrect_demo(maze_task):
+    t = MazeTeacher(traits(), maze_task)
     rng = np.random.default_rng(2)
-    bad = maze.preprocess(t.stroke(np.array([0.1, 0.03]), rng, slip=True))
-    good = maze.preprocess(t.stroke(np.array([0.1, 0.03]), rng, slip=False))
-    assert not maze.judge_demo(bad, bad[0, 1:]).passed[0]
-    assert maze.judge_demo(good, good[0, 1:]).passed[0]
+    bad = maze_task.preprocess(t.stroke(np.array([0.1, 0.03]), rng, slip=True))
+    good = maze_task.preprocess(t.stroke(np.array([0.1, 0.03]), rng, slip=False))
+    assert not maze_task.judge_demo(bad, bad[0, 1:]).passed[0]
+    assert maze_task.judge_demo(good, good[0, 1:]).passed[0]
 
 
 # --------------------------------------------------------------------------- pick-and-place

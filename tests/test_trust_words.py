@@ -14,7 +14,6 @@ import pytest
 from tutor.demofiles import bundled_demos
 from tutor.framework import INCORRECT, TeachingSession
 from tutor.framework.wording import change_points, efficacy_change
-from tutor.tasks.maze import MazeTask
 from tutor.views.text import incorrect_mark, summary
 
 NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
@@ -46,11 +45,6 @@ def _direction(text: str) -> int:
     return 0
 
 
-@pytest.fixture(scope="module")
-def task():
-    return MazeTask()
-
-
 @pytest.mark.parametrize(
     ("delta", "points", "words"),
     [
@@ -70,9 +64,9 @@ def test_the_change_sentence_follows_the_points_shown(delta, points, words):
     assert _direction(sentence) == np.sign(points)
 
 
-def test_the_incorrect_cell_says_the_direction_of_its_own_number(task):
+def test_the_incorrect_cell_says_the_direction_of_its_own_number(maze_task):
     # what notebook 01's "Failure 1" cell computes, on the bundled set it uses
-    wrong = TeachingSession(task)
+    wrong = TeachingSession(maze_task)
     for demo in bundled_demos("maze_incorrect")[:3]:
         wrong.add_demo(demo)
     record = wrong.latest
@@ -80,15 +74,15 @@ def test_the_incorrect_cell_says_the_direction_of_its_own_number(task):
     sign = int(np.sign(change_points(record.delta)))
     first = summary(record).splitlines()[0]
     assert _direction(first) == sign, first
-    mark = incorrect_mark(record, task)
+    mark = incorrect_mark(record, maze_task)
     assert _direction(mark) == sign, mark
     assert ("does not show" in mark) == (sign > 0), mark
     assert "obstacle 1" in mark  # the tutor's own check, with the rule it breaks
 
 
 @pytest.mark.parametrize("name", ["maze_good", "maze_incorrect", "maze_ambiguous"])
-def test_every_step_of_the_bundled_sets_says_its_direction(task, name):
-    session = TeachingSession(task)
+def test_every_step_of_the_bundled_sets_says_its_direction(maze_task, name):
+    session = TeachingSession(maze_task)
     for demo in bundled_demos(name):
         record = session.add_demo(demo)
         text = summary(record)
@@ -105,7 +99,7 @@ def test_notebook_01_prose_claims_no_direction_and_its_cells_say_it():
     assert "incorrect_mark(wrong.latest, task)" in code and "summary(wrong.latest)" in code
 
 
-def test_notebook_01_asks_for_nothing_it_cannot_do(task):
+def test_notebook_01_asks_for_nothing_it_cannot_do(maze_task):
     # "undo" is a button of notebooks 02 and 03; notebook 01 has none
     text = "\n".join(_cells(NB01, "markdown") + _cells(NB01, "code"))
     assert "undo" not in text.lower()
@@ -114,9 +108,9 @@ def test_notebook_01_asks_for_nothing_it_cannot_do(task):
     assert 'summary(mine.latest, starts="my_starts")' in code
     starts = ast.literal_eval(ast.parse(code).body[0].value)  # the cell's own start points
     rng = np.random.default_rng(0)
-    mine = TeachingSession(task)
+    mine = TeachingSession(maze_task)
     for start in starts:
-        mine.add_demo(task.layout.reference_path(start, rng, jitter=0.004))
+        mine.add_demo(maze_task.layout.reference_path(start, rng, jitter=0.004))
     out = summary(mine.latest, starts="my_starts")
     assert "undo" not in out.lower()
     assert [w.take_back for w in mine.latest.warnings if w.kind == INCORRECT] == [(3,)]

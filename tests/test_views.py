@@ -21,7 +21,6 @@ from matplotlib.figure import Figure  # noqa: E402
 
 import tutor.views.teaching as teaching_module  # noqa: E402
 from tutor.framework import TeachingSession  # noqa: E402
-from tutor.tasks.maze import MazeTask  # noqa: E402
 from tutor.views import (  # noqa: E402
     draw_maze,
     feedback_figure,
@@ -44,11 +43,6 @@ def _close_figures():
     plt.close("all")
 
 
-@pytest.fixture(scope="module")
-def task():
-    return MazeTask()
-
-
 def _teach(task, feedback="all", **kw):
     rng = np.random.default_rng(0)
     session = TeachingSession(task, feedback=feedback, **kw)
@@ -66,24 +60,24 @@ def _straight_to_target(layout, start=(0.02, 0.03)):
 
 
 @pytest.fixture(scope="module")
-def vf(task):
-    return _teach(task)
+def vf(maze_task):
+    return _teach(maze_task)
 
 
 @pytest.fixture(scope="module")
-def nf(task):
-    return _teach(task, feedback="none")
+def nf(maze_task):
+    return _teach(maze_task, feedback="none")
 
 
 @pytest.fixture(scope="module")
-def bf(task):
-    return _teach(task, feedback="batch", batch=BATCH)
+def bf(maze_task):
+    return _teach(maze_task, feedback="batch", batch=BATCH)
 
 
 @pytest.fixture(scope="module")
-def with_incorrect(task):
-    session = _teach(task)
-    record = session.add_demo(_straight_to_target(task.layout))
+def with_incorrect(maze_task):
+    session = _teach(maze_task)
+    record = session.add_demo(_straight_to_target(maze_task.layout))
     assert not record.demo_passed and "incorrect" in record.kinds
     return session
 
@@ -131,8 +125,8 @@ def _demo_lines(ax):
     ]
 
 
-def test_draw_maze_axes_in_cm(task):
-    ax = draw_maze(layout=task.layout)
+def test_draw_maze_axes_in_cm(maze_task):
+    ax = draw_maze(layout=maze_task.layout)
     assert isinstance(ax, Axes)
     assert ax.get_aspect() == 1.0
     assert ax.xaxis.get_major_formatter()(0.05, 0) == "5"
@@ -229,10 +223,10 @@ def test_set_diagram_labels_the_counts(with_incorrect):
     assert c["covered"] + c["failed"] == c["n"]
 
 
-def test_feedback_figure_and_empty_session(vf, task):
+def test_feedback_figure_and_empty_session(vf, maze_task):
     fig = feedback_figure(vf)
     assert isinstance(fig, Figure) and len(fig.axes) == 4
-    empty = TeachingSession(task)
+    empty = TeachingSession(maze_task)
     for draw in (plot_feedback, plot_grid_status, plot_progress, plot_set_diagram):
         assert isinstance(draw(empty), Axes)
 
@@ -260,17 +254,17 @@ def _paths_that_fail(layout):
     return np.stack([good, hit2, out, near, far])
 
 
-def test_classify_reads_the_maze_tasks_own_reasons(task):
+def test_classify_reads_the_maze_tasks_own_reasons(maze_task):
     from tutor.framework.task import Reason
     from tutor.views.maze_reasons import classify, failures
 
-    paths = _paths_that_fail(task.layout)
-    verdict = task.judge(paths)
+    paths = _paths_that_fail(maze_task.layout)
+    verdict = maze_task.judge(paths)
     assert verdict.passed.tolist() == [True, False, False, False, False]
     kinds = [classify(r).kind for r in verdict.causes]
     assert kinds == ["pass", "obstacle", "outside", "miss", "miss"]
     assert classify(verdict.causes[1]).obstacle == "obstacle 2"
-    found = failures(paths, verdict.causes, task.layout)
+    found = failures(paths, verdict.causes, maze_task.layout)
     np.testing.assert_allclose(found[1].point, [0.15, 0.195])  # where it went in
     np.testing.assert_allclose(found[2].point, [0.25, 0.10])
     assert found[3].miss == pytest.approx(0.003, abs=1e-6)  # from the target's edge
@@ -281,12 +275,12 @@ def test_classify_reads_the_maze_tasks_own_reasons(task):
     assert classify((Reason("no_grab"),)).kind == "other"
 
 
-def test_reason_summary_counts_each_cause(task):
+def test_reason_summary_counts_each_cause(maze_task):
     from tutor.views.maze_reasons import failures, reason_summary
 
-    paths = _paths_that_fail(task.layout)
+    paths = _paths_that_fail(maze_task.layout)
     paths = np.concatenate([paths, paths[3:4] + [0.0, -0.001]])  # a second near miss, 4 mm
-    found = failures(paths, task.judge(paths).causes, task.layout)
+    found = failures(paths, maze_task.judge(paths).causes, maze_task.layout)
     text = reason_summary(found)
     assert text.startswith("2 miss the target by 3–4 mm; ")
     assert "1 hits obstacle 2" in text and "1 leaves the maze" in text
@@ -295,7 +289,7 @@ def test_reason_summary_counts_each_cause(task):
     assert reason_summary(found, shown=[1, 0]) == "1 hits obstacle 2"
 
 
-def test_feedback_marks_failures_dashed_with_reasons_and_a_target_inset(vf, task):
+def test_feedback_marks_failures_dashed_with_reasons_and_a_target_inset(vf, maze_task):
     ax = plot_feedback(vf)
     fails = [ln for ln in ax.get_lines() if to_rgb(ln.get_color()) == to_rgb(FAIL)]
     passes = [ln for ln in ax.get_lines() if to_rgb(ln.get_color()) == to_rgb(PASS)]
@@ -313,11 +307,11 @@ def test_feedback_marks_failures_dashed_with_reasons_and_a_target_inset(vf, task
     assert sum(len(ln.get_xdata()) for ln in marks) == n_fail
     # the target is drawn to scale (no oversized ring), and zoomed in an inset
     circles = [p for p in ax.patches if isinstance(p, matplotlib.patches.Circle)]
-    assert [c.radius for c in circles] == [task.layout.target_radius]
+    assert [c.radius for c in circles] == [maze_task.layout.target_radius]
     assert not any(ln.get_marker() == "o" and ln.get_markersize() > 8 for ln in ax.get_lines())
     (inset,) = ax.child_axes
     assert np.ptp(inset.get_xlim()) <= 0.02
-    tx = task.layout.target_center[0]
+    tx = maze_task.layout.target_center[0]
     assert inset.get_xlim()[0] < tx < inset.get_xlim()[1]
 
 
@@ -329,7 +323,7 @@ def test_no_feedback_counts_no_reasons(nf):
 # ------------------------------------------------------------ the sketchpad's data
 
 
-def test_sketchpad_layout_is_the_widget_layout(task):
+def test_sketchpad_layout_is_the_widget_layout(maze_task):
     """The maze geometry has its own trait: a dict in `layout` broke every render (3 page
     errors "Cannot read properties of undefined (reading 'then')" in notebook 02)."""
     import ipywidgets
@@ -337,7 +331,7 @@ def test_sketchpad_layout_is_the_widget_layout(task):
     from tutor.errors import InvalidParameterError
     from tutor.views.sketchpad import Sketchpad, layout_spec
 
-    spec = layout_spec(task.layout)
+    spec = layout_spec(maze_task.layout)
     for pad in (Sketchpad(maze=spec), Sketchpad(layout=spec)):
         assert isinstance(pad.layout, ipywidgets.Layout)
         assert pad.maze == spec
@@ -348,14 +342,14 @@ def test_sketchpad_layout_is_the_widget_layout(task):
         Sketchpad(maze=spec, layout=spec)
 
 
-def test_sketchpad_sends_paths_as_bytes_and_counts_reasons(vf, task):
+def test_sketchpad_sends_paths_as_bytes_and_counts_reasons(vf, maze_task):
     from tutor.errors import InvalidParameterError
     from tutor.views.sketchpad import BROWSER_SAMPLES, Sketchpad, layout_spec
 
-    pad = Sketchpad(maze=layout_spec(task.layout))
+    pad = Sketchpad(maze=layout_spec(maze_task.layout))
     rec = vf.latest
     pad.show(vf.demos, vf.realisations, rec.passed, rec.shown, causes=rec.causes)
-    n = len(task.conditions)
+    n = len(maze_task.conditions)
     assert isinstance(pad.real_xy, bytes) and len(pad.real_xy) == n * BROWSER_SAMPLES * 2 * 4
     assert len(pad.realisations) == n and len(pad.demos) == 3
     np.testing.assert_allclose(pad.realisations[7][-1], vf.realisations[7, -1], atol=1e-6)
