@@ -371,7 +371,7 @@ class TeachingRun:
         kept = None if recording is None else round_recording(_recording(recording))
         record = self.session.add_demo(raw, shown=shown, condition=condition)
         if followed_rule is None:
-            followed_rule = self._rule_followed(self.session._demos[-1])
+            followed_rule = self._rule_followed(self.session.latest_demo)
         if self.policy.adaptive:
             shown = record.shown  # the selector's picks, kept so that a replay shows them
         demo = Demo(

@@ -193,6 +193,11 @@ class TeachingSession:
         return [d.copy() for d in self._demos]
 
     @property
+    def latest_demo(self) -> np.ndarray | None:
+        """The latest demonstration (preprocessed, a copy), None before the first."""
+        return self._demos[-1].copy() if self._demos else None
+
+    @property
     def history(self) -> list[FeedbackRecord]:
         """One record per demo, oldest first."""
         return list(self._history)

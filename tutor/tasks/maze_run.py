@@ -31,11 +31,15 @@ class MazeRun(TeachingRun):
     """A maze run (see the module docstring); ``MazeRun.new("VF", MazeTask())``."""
 
     experiment = 1
+    #: (session, its latest record, the advice): the rule worked out for the next demo
+    _advice = None
+    #: the rule in force while a demo is being added (VR), else None
+    _rule_in_force = None
 
     def advice(self) -> RuleAdvice:
         """VR: the rule that applies to the next demo (worked out once per step: the
         stroke's check, the picture's circle and the panel's words all read it)."""
-        cached = getattr(self, "_advice", None)
+        cached = self._advice
         if cached is not None and cached[0] is self.session and cached[1] is self.session.latest:
             return cached[2]
         advice = advise(self.task, self.session)
@@ -57,7 +61,7 @@ class MazeRun(TeachingRun):
             self._rule_in_force = None
 
     def _rule_followed(self, demo) -> bool | None:
-        rule = getattr(self, "_rule_in_force", None)
+        rule = self._rule_in_force
         return None if rule is None else followed(rule, self.task.condition_of(demo))
 
     @property
