@@ -24,6 +24,8 @@ import numpy as np
 from results_file import RESULTS, save
 from scipy.stats import mannwhitneyu
 
+from tutor.errors import TutorError
+from tutor.study.report import check_seeds
 from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.tasks.recording import steady_hand
@@ -70,7 +72,11 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = parser.parse_args(argv)
-    r = run(args.seeds)
+    try:
+        seeds = len(check_seeds(range(args.seeds)))
+    except TutorError as err:
+        parser.error(f"--seeds: {err}")
+    r = run(seeds)
     print(f"NF, plants {r['plants']}, {r['seeds']} seeds")
     print("  guided hand eps:", " ".join(f"{e:.2f}" for e in r["guided"]))
     print("  own hand eps:   ", " ".join(f"{e:.2f}" for e in r["own"]))
