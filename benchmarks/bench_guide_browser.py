@@ -50,7 +50,7 @@ def _jupyterlab(root: Path):
     port, token = free_port(), "lfd-bench"
     env = {k: v for k, v in os.environ.items() if k != "TUTOR_HEADLESS"}
     env["PYTHONPATH"] = os.pathsep.join([str(REPO), env.get("PYTHONPATH", "")])
-    env["TUTOR_SESSION_DIR"] = str(root / "sessions")
+    env["TUTOR_RUNS_DIR"] = str(root / "sessions")
     log = open(root / "jupyterlab.log", "w")  # noqa: SIM115
     proc = subprocess.Popen(
         [sys.executable, "-m", "jupyterlab", "--no-browser", "--ServerApp.ip=127.0.0.1"]

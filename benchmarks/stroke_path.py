@@ -10,7 +10,7 @@ chain
     travels *through* (each module hands it, or what was made of it, to the next).
 data
     Every ``tutor`` module with a function that receives the stroke, or a value a
-    function made from it (the demo, its record, the feedback record, the causes...),
+    function made from it (the demo, its record, the demo step, the causes...),
     in the order first reached. This counts the modules it merely touches too: the
     learner's maths, the record that stores it, the words.
 
@@ -112,7 +112,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = parser.parse_args(argv)
     os.environ["TUTOR_HEADLESS"] = "1"
-    os.environ["TUTOR_SESSION_DIR"] = tempfile.mkdtemp(prefix="stroke-path-")
+    os.environ["TUTOR_RUNS_DIR"] = tempfile.mkdtemp(prefix="stroke-path-")
     result = {}
     for condition in CONDITIONS:
         r = result[condition] = trace(condition)

@@ -25,7 +25,7 @@ What it sets up (deploy/README.md has the how-to):
 - The idle culler (jupyterhub-idle-culler) as a hub service: servers idle for
   ``LFD_IDLE_TIMEOUT`` seconds (default 3600) are stopped; their runs are saved already.
 - The class folder ``LFD_CLASS_DIR`` (default /srv/lfd-class): each trainee's
-  ``TUTOR_SESSION_DIR`` is ``<class folder>/<user name>``, made before their server
+  ``TUTOR_RUNS_DIR`` is ``<class folder>/<user name>``, made before their server
   starts, so the educator collects every run with ``lfd-tutor class <class folder>``.
   As root the class folder is root:``LFD_EDUCATORS_GROUP`` (default lfd-educators) 2751
   and each trainee folder trainee:educators 2750 (setgid), modes set explicitly whatever
@@ -262,7 +262,7 @@ c.Spawner.start_timeout = 180
 
 
 def trainee_folder(spawner) -> Path:
-    """The trainee's ``TUTOR_SESSION_DIR``: ``<class folder>/<user name>``."""
+    """The trainee's ``TUTOR_RUNS_DIR``: ``<class folder>/<user name>``."""
     return CLASS_DIR / spawner.user.name
 
 
@@ -415,7 +415,7 @@ def pre_spawn_hook(spawner) -> None:
     home.mkdir(parents=True, exist_ok=True)
     notebooks = home / NOTEBOOK_FOLDER
     if not notebooks.exists():  # a trainee's own edits are never overwritten
-        shutil.copytree(NOTEBOOKS, notebooks, ignore=shutil.ignore_patterns("sessions"))
+        shutil.copytree(NOTEBOOKS, notebooks, ignore=shutil.ignore_patterns("sessions", "runs"))
         if uid != -1:
             give(notebooks, uid, gid)
     spawner.notebook_dir = str(notebooks)
@@ -429,7 +429,7 @@ def pre_spawn_hook(spawner) -> None:
 c.Spawner.pre_spawn_hook = pre_spawn_hook
 # callables: '{username}' is NOT expanded inside Spawner.environment values
 c.Spawner.environment = {
-    "TUTOR_SESSION_DIR": lambda spawner: str(trainee_folder(spawner)),
+    "TUTOR_RUNS_DIR": lambda spawner: str(trainee_folder(spawner)),
 }
 
 # ---------------------------------------------------------------- the idle culler

@@ -36,9 +36,9 @@ source scripts/env.sh
 
 export TUTOR_HEADLESS=1
 # teaching runs saved by the notebooks go to a throwaway folder, never a trainee's
-TUTOR_SESSION_DIR="$(mktemp -d)"
-export TUTOR_SESSION_DIR
-trap 'rm -rf "$TUTOR_SESSION_DIR"' EXIT
+TUTOR_RUNS_DIR="$(mktemp -d)"
+export TUTOR_RUNS_DIR
+trap 'rm -rf "$TUTOR_RUNS_DIR"' EXIT
 export MPLBACKEND=Agg
 
 ruff_status=0

@@ -47,5 +47,5 @@ def person(tmp_path, monkeypatch):
         "JUPYTERHUB_USER",
     ):
         monkeypatch.delenv(var, raising=False)
-    monkeypatch.setenv("TUTOR_SESSION_DIR", str(tmp_path / "sessions"))
+    monkeypatch.setenv("TUTOR_RUNS_DIR", str(tmp_path / "sessions"))
     return monkeypatch

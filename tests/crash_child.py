@@ -11,7 +11,7 @@ per command, so a test can kill many teachers without paying Python's start-up a
 imports each time. It reaps each teacher and prints ``PID ended CODE`` (``-9`` after
 SIGKILL), and exits at the end of stdin.
 
-A teacher is a real maze tutor, ``MazeTutor("VF", session_file=SESSION_FILE)``, which
+A teacher is a real maze tutor, ``MazeTutor("VF", run_file=SESSION_FILE)``, which
 resumes the file if it exists and autosaves on every ``add``. It prints, one line each
 and flushed at once:
 
@@ -67,10 +67,10 @@ def hang_on(name: str, call_number: int) -> None:
     setattr(os, name, wrapper)
 
 
-def teach(session_file: str, hang: str | None = None, call_number: int = 0) -> None:
-    """Resume ``session_file`` and add demonstrations until killed (never returns)."""
+def teach(run_file: str, hang: str | None = None, call_number: int = 0) -> None:
+    """Resume ``run_file`` and add demonstrations until killed (never returns)."""
     demos = bundled_demos("maze_good")
-    tutor = MazeTutor("VF", session_file=session_file)
+    tutor = MazeTutor("VF", run_file=run_file)
     say(f"resumed {tutor.session.n_demos}")
     if hang is not None:
         hang_on(hang, call_number)
@@ -91,12 +91,12 @@ def parse_teach(args: list[str]) -> tuple[str, str | None, int]:
 
 def fork_teacher(args: list[str]) -> None:
     """Fork one teacher for a ``teach`` command, wait for it to die and report how."""
-    session_file, hang, call_number = parse_teach(args)
+    run_file, hang, call_number = parse_teach(args)
     sys.stdout.flush()
     pid = os.fork()
     if pid == 0:
         try:
-            teach(session_file, hang, call_number)
+            teach(run_file, hang, call_number)
         except BaseException:
             traceback.print_exc()
             sys.stderr.flush()

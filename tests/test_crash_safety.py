@@ -1,4 +1,4 @@
-"""A kill -9 never loses a saved demonstration nor leaves a half-written session file.
+"""A kill -9 never loses a saved demonstration nor leaves a half-written run file.
 
 Teachers (tests/crash_child.py) are real maze tutors in their own processes that add
 bundled demonstrations until they are killed with SIGKILL: at random moments, and
@@ -29,7 +29,7 @@ from tutor.tasks.maze import MazeTask
 from tutor.tasks.maze_run import MazeRun
 
 CHILD = Path(__file__).with_name("crash_child.py")
-#: random kills on one session file before the next file (keeps files, and loads, small)
+#: random kills on one run file before the next file (keeps files, and loads, small)
 KILLS_PER_FILE = 4
 #: a random kill lands this long after the teacher resumed (s)
 DELAY_RANGE = (0.0, 0.35)

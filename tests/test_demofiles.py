@@ -476,7 +476,7 @@ def test_an_oversized_or_empty_upload_is_refused_unwritten(monkeypatch):
 def test_the_maze_tutor_shows_a_hostile_upload_in_its_panel(tmp_path):
     from tutor.views.maze_app import MazeTutor
 
-    app = MazeTutor("VF", session_file=tmp_path / "vf.json")
+    app = MazeTutor("VF", run_file=tmp_path / "vf.json")
     path = save_demos(tmp_path / "up.csv", list(bundled_demos("maze_good"))[:1])
     data = path.read_bytes()
     app.upload.value = (upload("../my\x00demo.csv", data)["new"][0],)

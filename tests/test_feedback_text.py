@@ -136,9 +136,9 @@ def test_plain_reasons_are_words_from_data_without_sample_numbers():
     from tutor.tasks.maze import MazeTask
 
     task = MazeTask()
-    hit = (Reason("obstacle", 56, 200, obstacle="obstacle 2"), Reason("end", distance=0.039))
-    assert plain_reason(task, hit) == "hit obstacle 2 and ended 3.9 cm from the target"
-    words = "hit obstacle 2 at sample 57 of 200 and ended 3.9 cm from the target"
+    hit = (Reason("obstacle", 56, 200, obstacle=1), Reason("end", distance=0.039))
+    assert plain_reason(task, hit) == "hit obstacle 2 (right-hand) and ended 3.9 cm from the target"
+    words = "hit obstacle 2 (right-hand) at sample 57 of 200 and ended 3.9 cm from the target"
     assert task.reason_words(hit) == words
     assert plain_reason(task, ()) == ""
 
@@ -167,7 +167,7 @@ def test_the_tutors_score_equals_the_cohort_studys_on_the_same_files(tmp_path, m
         assert again.score().efficiency == pytest.approx(row["eta"])
     # and the pick-and-place tutor, opening that file, says the same number
     app = PickPlaceTutor(
-        "BF", session_file=tmp_path / "BF.json", task=pp_run.task, trainee=pp_run.record.trainee
+        "BF", run_file=tmp_path / "BF.json", task=pp_run.task, trainee=pp_run.record.trainee
     )
     assert app.run.n_demos == pp_run.n_demos
     assert app.run.score().efficiency == pytest.approx(pp_run.score().efficiency)

@@ -45,7 +45,7 @@ def finishes(fn, seconds=10.0):
 def test_a_fifo_is_refused_without_waiting_for_a_writer(tmp_path):
     fifo = tmp_path / "x.json"
     os.mkfifo(fifo)
-    thread, outcome = finishes(lambda: read_json(fifo, "session file"))
+    thread, outcome = finishes(lambda: read_json(fifo, "run file"))
     if thread.is_alive():  # release the blocked reader before failing
         os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
         pytest.fail("read_json blocked on a FIFO")
@@ -58,7 +58,7 @@ def test_a_device_is_refused_unread(tmp_path):
     link = tmp_path / "zero.json"
     link.symlink_to("/dev/zero")
     for path in (Path("/dev/zero"), link):
-        thread, outcome = finishes(lambda p=path: read_json(p, "session file"))
+        thread, outcome = finishes(lambda p=path: read_json(p, "run file"))
         assert not thread.is_alive(), "read_json kept reading a device"
         assert isinstance(outcome.get("error"), InvalidFileError)
         assert "is a device, not a regular file" in str(outcome["error"])
@@ -134,7 +134,7 @@ def test_a_key_given_twice_in_one_object_is_refused_by_name(tmp_path, text, key)
     path = tmp_path / "f.json"
     path.write_text(text)
     with pytest.raises(InvalidFileError) as info:
-        read_json(path, "session file")
+        read_json(path, "run file")
     message = str(info.value)
     assert f'the key "{key}" appears twice' in message and "keep one" in message
 
@@ -149,7 +149,7 @@ def test_a_loop_of_symbolic_links_says_how_to_fix_it(tmp_path):
     os.symlink("b.json", tmp_path / "a.json")
     os.symlink("a.json", tmp_path / "b.json")
     with pytest.raises(InvalidFileError, match="loop of symbolic links") as info:
-        read_json(tmp_path / "a.json", "session file")
+        read_json(tmp_path / "a.json", "run file")
     assert "point it at the real file" in str(info.value)
 
 
@@ -174,7 +174,7 @@ def test_not_utf8_is_refused(tmp_path):
 def test_bad_paths_give_a_named_error_not_a_raw_one(tmp_path, make, words):
     (tmp_path / "plain.txt").write_text("x")
     with pytest.raises(InvalidFileError, match=words) as info:
-        read_json(make(tmp_path), "session file")
+        read_json(make(tmp_path), "run file")
     assert isinstance(info.value, TutorError) and not isinstance(info.value, OSError)
 
 

@@ -3,7 +3,7 @@
 Every case of the review (and more) is one row of a table below, thrown at the tutors
 (:class:`~tutor.views.maze_app.MazeTutor`, :class:`~tutor.views.pickplace_app.PickPlaceTutor`:
 their actions, Load, the upload widget, resuming a run file), at the library
-(``session_dir``, ``load_demos``, ``bundled_demos``, ``TeachingSession``, ``TPGMM``,
+(``trainee_dir``, ``load_demos``, ``bundled_demos``, ``TeachingSession``, ``TPGMM``,
 ``Frame``) and at the command line (real subprocesses). For each case:
 
 1. nothing escapes: a tutor action returns and ``app.message`` is a plain sentence (no
@@ -49,7 +49,7 @@ from tutor.errors import (
     TutorError,
 )
 from tutor.framework import RunRecord, TeachingSession, Trainee
-from tutor.runtime import session_dir
+from tutor.runtime import trainee_dir
 from tutor.tasks.maze import MazeTask
 from tutor.tasks.maze_run import MazeRun
 from tutor.tasks.pickplace import PickPlaceTask
@@ -344,7 +344,7 @@ class Ctx:
 
     def maze(self, condition="VF", demos=1, finished=False, path=None, trainee=TRAINEE):
         path = self.tmp / "runs" / f"{condition}.json" if path is None else path
-        app = self.keep(MazeTutor(condition, session_file=path, trainee=trainee))
+        app = self.keep(MazeTutor(condition, run_file=path, trainee=trainee))
         for demo in self.w.good[:demos]:
             app.add(demo)
         if finished:
@@ -356,7 +356,7 @@ class Ctx:
         path = self.tmp / "runs" / f"{condition}-{run}.json"
         app = self.keep(
             PickPlaceTutor(
-                condition, session_file=path, task=self.w.pp_task, seed=0, trainee=TRAINEE, run=run
+                condition, run_file=path, task=self.w.pp_task, seed=0, trainee=TRAINEE, run=run
             )
         )
         for plant in (44, 0, 99)[:demos]:
@@ -381,7 +381,7 @@ class Ctx:
 @pytest.fixture
 def c(w, tmp_path, mount, monkeypatch):
     monkeypatch.delenv("JUPYTERHUB_USER", raising=False)
-    monkeypatch.delenv("TUTOR_SESSION_DIR", raising=False)
+    monkeypatch.delenv("TUTOR_RUNS_DIR", raising=False)
     ctx = Ctx(w, tmp_path, mount, monkeypatch)
     yield ctx
     ctx.close()
@@ -391,7 +391,7 @@ def c(w, tmp_path, mount, monkeypatch):
 class Snapshot:
     record: RunRecord
     n_demos: int
-    session_file: Path
+    run_file: Path
     data: object
     elapsed: float | None
 
@@ -400,8 +400,8 @@ class Snapshot:
         return cls(
             app.record,
             app.run.n_demos,
-            app.session_file,
-            file_bytes(app.session_file),
+            app.run_file,
+            file_bytes(app.run_file),
             getattr(app.run, "elapsed", None),
         )
 
@@ -506,7 +506,7 @@ ACTIONS = [
 def second_tutor(app, c, do):
     """The same run opened again in this kernel (its cell run again): the newer tutor
     carries on, and the older view, now read-only, changes nothing and says why."""
-    other = c.keep(MazeTutor("VF", session_file=app.session_file, trainee=TRAINEE))
+    other = c.keep(MazeTutor("VF", run_file=app.run_file, trainee=TRAINEE))
     assert not other.read_only and app.read_only, (other.message, app.message)
     assert "replaced by a newer one" in app.message
     do(app)
@@ -518,7 +518,7 @@ CHILD = textwrap.dedent(
     """
     import sys
     from tutor.views.maze_app import MazeTutor
-    app = MazeTutor("VF", session_file=sys.argv[1], trainee=sys.argv[2])
+    app = MazeTutor("VF", run_file=sys.argv[1], trainee=sys.argv[2])
     print("ready", app.read_only, app.session.n_demos, flush=True)
     sys.stdin.readline()  # hold the file until told to go
     """
@@ -530,7 +530,7 @@ def second_kernel(app, c):
     app.close()  # let go, as a restarted notebook would, so the other kernel takes the file
     env = {**os.environ, "PYTHONPATH": str(REPO), "MPLBACKEND": "Agg"}
     proc = subprocess.Popen(
-        [sys.executable, "-c", CHILD, str(app.session_file), TRAINEE],
+        [sys.executable, "-c", CHILD, str(app.run_file), TRAINEE],
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -540,7 +540,7 @@ def second_kernel(app, c):
     c.procs.append(proc)
     line = proc.stdout.readline()
     assert line.split() == ["ready", "False", "2"], (line, proc.stderr.read())
-    other = c.keep(MazeTutor("VF", session_file=app.session_file, trainee=TRAINEE))
+    other = c.keep(MazeTutor("VF", run_file=app.run_file, trainee=TRAINEE))
     assert other.read_only and other.session.n_demos == 2, other.message
     other.add(c.w.good[3])
     other.undo()
@@ -566,10 +566,10 @@ def test_a_refused_action_changes_nothing_and_says_why(c, tutor, options, action
     after = Snapshot.of(app)
     assert after.record == before.record, "the run in memory changed"
     assert after.n_demos == before.n_demos and after.elapsed == before.elapsed
-    assert after.session_file == before.session_file
+    assert after.run_file == before.run_file
     assert after.data == before.data, "the run file changed"
     if before.data is not None:  # the completed demos are still in the file
-        assert saved_record(app.session_file).current.n_demos == before.n_demos
+        assert saved_record(app.run_file).current.n_demos == before.n_demos
 
 
 # ====================================================================== 2. Load: refused files
@@ -746,7 +746,7 @@ def test_a_refused_load_changes_nothing_and_says_why(c, tutor, options, name, ma
     assert after.n_demos == before.n_demos and after.elapsed == before.elapsed
     assert after.data == before.data, "the run file changed"
     assert file_bytes(path) == loaded, "the loaded file changed"
-    assert saved_record(app.session_file).current.n_demos == before.n_demos
+    assert saved_record(app.run_file).current.n_demos == before.n_demos
 
 
 # ================================================================ 3. Load: files that must load
@@ -800,9 +800,9 @@ def test_a_good_file_loads_and_keeps_the_earlier_demos(c, name, make, check):
     act(app.load, path)
     assert_plain(app.message)
     check(app, before, c.w)
-    on_disk = every_demo(saved_record(app.session_file))
+    on_disk = every_demo(saved_record(app.run_file))
     assert all(d in on_disk for d in every_demo(before.record)), "an earlier demo was lost"
-    assert saved_record(app.session_file) == app.record
+    assert saved_record(app.run_file) == app.record
 
 
 # ====================================================================== 4. the upload button
@@ -861,7 +861,7 @@ def test_an_upload_under_a_hostile_name_loads_and_writes_nowhere_else(c, name):
     assert "\x00" not in app.message
     for outside in (Path("/tmp/lfd-hostile-escape.json"), Path("/etc/lfd-hostile-escape.json")):
         assert not outside.exists()
-    assert saved_record(app.session_file) == app.record
+    assert saved_record(app.run_file) == app.record
 
 
 def test_an_upload_into_a_finished_run_is_refused(c):
@@ -869,7 +869,7 @@ def test_an_upload_into_a_finished_run_is_refused(c):
     before = Snapshot.of(app)
     act(upload, app, "more.json", demo_json_bytes(c.w))
     assert_plain(app.message, r"finished", r"reset")
-    assert Snapshot.of(app).record == before.record and file_bytes(app.session_file) == before.data
+    assert Snapshot.of(app).record == before.record and file_bytes(app.run_file) == before.data
 
 
 # ====================================================================== 5. opening over a bad file
@@ -907,11 +907,11 @@ def test_a_bad_run_file_is_left_alone_and_the_run_goes_elsewhere(c, make, what, 
     path.parent.mkdir()
     make(path, c.w)
     there = file_bytes(path)
-    app = act(lambda: c.keep(MazeTutor("VF", session_file=path, trainee=TRAINEE)))
+    app = act(lambda: c.keep(MazeTutor("VF", run_file=path, trainee=TRAINEE)))
     assert_plain(app.message, what, fix)
-    assert app.session_file != path and app.session.n_demos == 0
+    assert app.run_file != path and app.session.n_demos == 0
     act(app.add, c.w.good[0])
-    assert saved_record(app.session_file).current.n_demos == 1
+    assert saved_record(app.run_file).current.n_demos == 1
     assert file_bytes(path) == there, "the file that was there changed"
 
 
@@ -919,7 +919,7 @@ def make_then_close(steps):
     """A maker that teaches a run with a real tutor (``steps(app, w)``) and closes it."""
 
     def make(path: Path, w) -> None:
-        app = MazeTutor("VF", session_file=path, trainee=TRAINEE)
+        app = MazeTutor("VF", run_file=path, trainee=TRAINEE)
         steps(app, w)
         app.close()
 
@@ -953,9 +953,9 @@ def test_a_good_run_file_resumes_with_nothing_lost(c, make, trainee, check):
     path = c.tmp / "runs" / "VF.json"
     path.parent.mkdir()
     make(path, c.w)
-    app = act(lambda: c.keep(MazeTutor("VF", session_file=path, trainee=trainee)))
+    app = act(lambda: c.keep(MazeTutor("VF", run_file=path, trainee=trainee)))
     assert_plain(app.message, r"resumed")
-    assert app.session_file == path and check(app), (app.message, app.record)
+    assert app.run_file == path and check(app), (app.message, app.record)
     before = app.record
     act(app.add, c.w.good[4])
     on_disk = saved_record(path)
@@ -1038,7 +1038,7 @@ LOCKLESS = [
 @pytest.mark.parametrize("setup, what, fix", [pytest.param(*r[1:], id=r[0]) for r in SAVES])
 def test_a_failed_save_keeps_every_demo_and_the_old_file(c, setup, what, fix):
     path, breaks, repair = setup(c)
-    app = act(lambda: c.keep(MazeTutor("VF", session_file=path, trainee=TRAINEE)))
+    app = act(lambda: c.keep(MazeTutor("VF", run_file=path, trainee=TRAINEE)))
     act(app.add, c.w.good[0])
     if breaks is not None:
         assert not app.unsaved and saved_record(path).current.n_demos == 1, app.message
@@ -1061,7 +1061,7 @@ def test_a_run_that_cannot_be_locked_opens_read_only_and_writes_nothing(c, setup
     """The lock cannot be taken, so the tutor fails closed: read-only, said in plain words;
     once the folder is fixed, Try again takes the file and saving works."""
     path, _, repair = setup(c)
-    app = act(lambda: c.keep(MazeTutor("VF", session_file=path, trainee=TRAINEE)))
+    app = act(lambda: c.keep(MazeTutor("VF", run_file=path, trainee=TRAINEE)))
     assert app.read_only
     assert_plain(app.message, what, fix)
     assert re.search(r"cannot be locked.*read-only", app.message, re.I | re.S), app.message
@@ -1099,12 +1099,12 @@ CONSTRUCTIONS = [
      r"whole number >= 1"),
     ("run-as-text", lambda c: PickPlaceTutor("BF", task=c.w.pp_task, run="2"), r"got '2'",
      r"whole number >= 1"),
-    ("session-file-with-NUL", lambda c: MazeTutor("VF", session_file=c.tmp / "V\x00F.json"),
+    ("session-file-with-NUL", lambda c: MazeTutor("VF", run_file=c.tmp / "V\x00F.json"),
      r"NUL", r"name"),
     ("session-file-name-of-300-bytes",
-     lambda c: MazeTutor("VF", session_file=c.tmp / ("v" * 300 + ".json")),
+     lambda c: MazeTutor("VF", run_file=c.tmp / ("v" * 300 + ".json")),
      r"bytes long|too long", r"shorter"),
-    ("session-file-that-is-a-number", lambda c: MazeTutor("VF", session_file=123),
+    ("session-file-that-is-a-number", lambda c: MazeTutor("VF", run_file=123),
      r"123|path", r"give|file name|path"),
 ]  # fmt: skip
 
@@ -1142,18 +1142,18 @@ def demo_file(c, name, make) -> Path:
 
 
 def set_session_dir(c, value) -> None:
-    c.monkeypatch.setenv("TUTOR_SESSION_DIR", str(value))
+    c.monkeypatch.setenv("TUTOR_RUNS_DIR", str(value))
 
 
 def session_dir_in_a_file(c, below: str = ""):
     (c.tmp / "afile").write_text("x")
     set_session_dir(c, c.tmp / "afile" / below)
-    return session_dir(TRAINEE)
+    return trainee_dir(TRAINEE)
 
 
 def session_dir_on_a_read_only_disk(c):
     set_session_dir(c, c.mount("ro", "ro,size=64k") / "class")
-    return session_dir(TRAINEE)
+    return trainee_dir(TRAINEE)
 
 
 #: (id, call(c), error class, what, fix)
@@ -1240,49 +1240,49 @@ LIBRARY = [
     ("frame-complex", lambda c: Frame(np.eye(2) * 1j, [0, 0]), InvalidFrameError,
      r"complex|real|numbers", r"real|matrix"),
     # --- trainees and their folders
-    ("session_dir-empty-name", lambda c: session_dir(""), InvalidParameterError, r"empty",
+    ("trainee_dir-empty-name", lambda c: trainee_dir(""), InvalidParameterError, r"empty",
      r"type a name"),
-    ("session_dir-300-characters", lambda c: session_dir("x" * 300), InvalidParameterError,
+    ("trainee_dir-300-characters", lambda c: trainee_dir("x" * 300), InvalidParameterError,
      r"300 characters", r"at most 200"),
-    ("session_dir-a-number", lambda c: session_dir(7), InvalidParameterError, r"must be text",
+    ("trainee_dir-a-number", lambda c: trainee_dir(7), InvalidParameterError, r"must be text",
      r"trainee = "),
-    ("session_dir-TUTOR_SESSION_DIR-is-a-file", lambda c: session_dir_in_a_file(c),
+    ("trainee_dir-TUTOR_RUNS_DIR-is-a-file", lambda c: session_dir_in_a_file(c),
      InvalidParameterError, r"is a file, not a folder", r"point it at a folder"),
-    ("session_dir-TUTOR_SESSION_DIR-through-a-file",
+    ("trainee_dir-TUTOR_RUNS_DIR-through-a-file",
      lambda c: session_dir_in_a_file(c, "class"), SaveError, r"cannot make the folder",
      r"folder you can write to"),
-    ("session_dir-on-a-read-only-disk", session_dir_on_a_read_only_disk, SaveError,
+    ("trainee_dir-on-a-read-only-disk", session_dir_on_a_read_only_disk, SaveError,
      r"read-only", r"folder you can write to"),
-    ("session_dir-no-name-and-none-set",
+    ("trainee_dir-no-name-and-none-set",
      lambda c: [c.monkeypatch.delenv(v, raising=False) for v in ("TUTOR_TRAINEE",
-                "JUPYTERHUB_USER")] and session_dir(None),
+                "JUPYTERHUB_USER")] and trainee_dir(None),
      InvalidParameterError, r"no name was given", r"type your name"),
     ("trainee-from-a-hub-user-with-a-control-character",
-     lambda c: c.monkeypatch.setenv("JUPYTERHUB_USER", "st\x01udent") or session_dir(None),
+     lambda c: c.monkeypatch.setenv("JUPYTERHUB_USER", "st\x01udent") or trainee_dir(None),
      InvalidParameterError, r"control characters", r"type a name"),
 ]  # fmt: skip
 
 
 @pytest.mark.parametrize("call, error, what, fix", [pytest.param(*r[1:], id=r[0]) for r in LIBRARY])
 def test_the_library_refuses_with_a_named_error(c, call, error, what, fix):
-    c.monkeypatch.setenv("TUTOR_SESSION_DIR", str(c.tmp / "sessions"))
+    c.monkeypatch.setenv("TUTOR_RUNS_DIR", str(c.tmp / "sessions"))
     exc = raised(lambda: call(c))
     assert isinstance(exc, error), f"{type(exc).__name__}, not {error.__name__}: {exc}"
     assert_plain(str(exc), what, fix)
 
 
 def folders_differ(c, a, b):
-    return session_dir(a) != session_dir(b)
+    return trainee_dir(a) != trainee_dir(b)
 
 
 def same_folder_or_refused(c, typed, plain):
     """A name with invisible direction marks: the plain name's folder, or a named error."""
     try:
-        got = session_dir(typed)
+        got = trainee_dir(typed)
     except InvalidParameterError as exc:
         assert_plain(str(exc), r"invisible|direction|control|format", r"type a name|remove")
         return True
-    return got == session_dir(plain)
+    return got == trainee_dir(plain)
 
 
 def no_bidi_override_kept(c):
@@ -1298,7 +1298,7 @@ def no_bidi_override_kept(c):
 
 
 def fits_in_a_name(c, name):
-    folder = session_dir(name)
+    folder = trainee_dir(name)
     return folder.is_dir() and len(folder.name.encode()) <= 255
 
 
@@ -1308,12 +1308,12 @@ LIBRARY_OK = [
     ("folders-two-devanagari-names", lambda c: folders_differ(c, "नमस्ते", "नमस्ती")),
     ("folders-two-emoji", lambda c: folders_differ(c, "😀", "😁")),
     ("folders-Anna-and-anna", lambda c: folders_differ(c, "Anna", "anna")),
-    ("folder-of-Zoe-NFC-and-NFD", lambda c: session_dir("Zo\u00eb") == session_dir("Zoe\u0308")),
+    ("folder-of-Zoe-NFC-and-NFD", lambda c: trainee_dir("Zo\u00eb") == trainee_dir("Zoe\u0308")),
     ("folder-of-a-name-of-400-bytes", lambda c: fits_in_a_name(c, "é" * 200)),
     ("folder-of-200-emoji", lambda c: fits_in_a_name(c, "😀" * 200)),
     ("folder-of-None-is-the-hub-user",
      lambda c: c.monkeypatch.setenv("JUPYTERHUB_USER", "mai")
-     or session_dir(None) == session_dir("mai")),
+     or trainee_dir(None) == trainee_dir("mai")),
     ("folder-of-a-name-with-rtl-marks",
      lambda c: same_folder_or_refused(c, "\u200fMai Anh\u200e", "Mai Anh")),
     ("folder-of-a-name-with-zero-width-space",
@@ -1324,7 +1324,7 @@ LIBRARY_OK = [
 
 @pytest.mark.parametrize("check", [pytest.param(r[1], id=r[0]) for r in LIBRARY_OK])
 def test_the_library_accepts_what_it_should(c, check):
-    c.monkeypatch.setenv("TUTOR_SESSION_DIR", str(c.tmp / "sessions"))
+    c.monkeypatch.setenv("TUTOR_RUNS_DIR", str(c.tmp / "sessions"))
     try:
         with deadline():
             assert check(c) is True

@@ -23,7 +23,7 @@ def good():
 
 
 def test_a_stroke_updates_the_picture_and_panel(tmp_path, good):
-    app = MazeTutor("VF", session_file=tmp_path / "vf.json")
+    app = MazeTutor("VF", run_file=tmp_path / "vf.json")
     assert "demonstrations: 0" in app.panel.value and app.pad.realisations == []
     render = app.pad.render_id
     app.pad.draw(good[0])
@@ -36,7 +36,7 @@ def test_a_stroke_updates_the_picture_and_panel(tmp_path, good):
 
 
 def test_no_feedback_hides_the_picture_until_finish(tmp_path, good):
-    app = MazeTutor("NF", session_file=tmp_path / "nf.json")
+    app = MazeTutor("NF", run_file=tmp_path / "nf.json")
     for demo in good[:2]:
         app.pad.draw(demo)
     assert app.pad.shown == [] and "efficacy" not in app.panel.value
@@ -48,7 +48,7 @@ def test_no_feedback_hides_the_picture_until_finish(tmp_path, good):
 
 
 def test_rules_circle_and_compliance(tmp_path, good):
-    app = MazeTutor("VR", session_file=tmp_path / "vr.json")
+    app = MazeTutor("VR", run_file=tmp_path / "vr.json")
     assert app.pad.rule_circle is None and "Rule 1" in app.panel.value
     app.pad.draw(good[0])
     assert app.pad.rule_circle["radius"] == pytest.approx(0.04)
@@ -61,7 +61,7 @@ def test_rules_circle_and_compliance(tmp_path, good):
 
 
 def test_rejected_stroke_changes_nothing(tmp_path, good):
-    app = MazeTutor("VF", session_file=tmp_path / "vf.json")
+    app = MazeTutor("VF", run_file=tmp_path / "vf.json")
     app.pad.draw(good[0])
     saved = (tmp_path / "vf.json").read_text()
     app.pad.draw([[0.0, 0.05, 0.03]])  # a click, not a stroke
@@ -77,7 +77,7 @@ def test_killed_kernel_loses_no_demo(tmp_path):
         import os, signal, json
         from tutor.demofiles import bundled_demos
         from tutor.views.maze_app import MazeTutor
-        app = MazeTutor("VF", session_file={str(path)!r})
+        app = MazeTutor("VF", run_file={str(path)!r})
         for demo in bundled_demos("maze_good")[:3]:
             app.pad.draw(demo)
         print(json.dumps(app.session.latest.efficacy), flush=True)
@@ -89,7 +89,7 @@ def test_killed_kernel_loses_no_demo(tmp_path):
     )
     assert proc.returncode == -signal.SIGKILL
     eps = json.loads(proc.stdout.strip().splitlines()[-1])
-    app = MazeTutor("VF", session_file=path)
+    app = MazeTutor("VF", run_file=path)
     assert app.session.n_demos == 3
     assert app.session.latest.efficacy == eps
     assert "Resumed 3" in app.panel.value
@@ -111,7 +111,7 @@ def test_corrupt_session_file_is_left_untouched(tmp_path, good, content):
         content.encode("utf-8", "surrogateescape") if isinstance(content, str) else content
     )
     before = path.read_bytes()
-    app = MazeTutor("VF", session_file=path)
+    app = MazeTutor("VF", run_file=path)
     assert "Could not resume" in app.panel.value
     app.pad.draw(good[0])
     assert app.session.n_demos == 1
@@ -119,7 +119,7 @@ def test_corrupt_session_file_is_left_untouched(tmp_path, good, content):
 
 
 def test_load_demo_file_and_hostile_files(tmp_path, good):
-    app = MazeTutor("VF", session_file=tmp_path / "vf.json")
+    app = MazeTutor("VF", run_file=tmp_path / "vf.json")
     path = save_demos(tmp_path / "mine.csv", list(good)[:2])
     app.load(path)
     assert app.session.n_demos == 2 and "Added 2" in app.message
@@ -134,7 +134,7 @@ def test_load_demo_file_and_hostile_files(tmp_path, good):
 
 
 def test_upload_widget_loads_through_the_same_checks(tmp_path, good):
-    app = MazeTutor("VF", session_file=tmp_path / "vf.json")
+    app = MazeTutor("VF", run_file=tmp_path / "vf.json")
     data = save_demos(tmp_path / "up.json", list(good)[:1], task="maze").read_bytes()
     upload = {
         "name": "up.json",
@@ -150,7 +150,7 @@ def test_upload_widget_loads_through_the_same_checks(tmp_path, good):
 def test_save_export_and_compare(tmp_path, good):
     runs = []
     for cond, demos in [("NF", good[:2]), ("VF", good), ("VR", good)]:
-        app = MazeTutor(cond, session_file=tmp_path / f"{cond}.json")
+        app = MazeTutor(cond, run_file=tmp_path / f"{cond}.json")
         for d in demos:
             app.pad.draw(d)
         app.finish()

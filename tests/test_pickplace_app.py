@@ -11,7 +11,7 @@ from tutor.views.pickplace_app import PickPlaceTutor, compare_runs, tray_status
 
 
 def test_tray_shows_only_what_the_condition_shows(pickplace_task, tmp_path):
-    nf = PickPlaceTutor("NF", session_file=tmp_path / "nf.json", task=pickplace_task, seed=0)
+    nf = PickPlaceTutor("NF", run_file=tmp_path / "nf.json", task=pickplace_task, seed=0)
     nf.select(0)
     nf.demonstrate()
     status = tray_status(nf.run)
@@ -67,18 +67,18 @@ def test_wrong_plant_mistake_is_flagged(pickplace_task):
 
 def test_resume_and_corrupt_file(pickplace_task, tmp_path):
     path = tmp_path / "bf.json"
-    t = PickPlaceTutor("BF", session_file=path, task=pickplace_task, seed=3)
+    t = PickPlaceTutor("BF", run_file=path, task=pickplace_task, seed=3)
     t.demonstrate(0)
     t.demonstrate(99)
-    again = PickPlaceTutor("BF", session_file=path, task=pickplace_task)
+    again = PickPlaceTutor("BF", run_file=path, task=pickplace_task)
     assert again.run.session.n_demos == 2
     assert again.run.elapsed == pytest.approx(t.run.elapsed)
-    other = PickPlaceTutor("SF", session_file=path, task=pickplace_task)
+    other = PickPlaceTutor("SF", run_file=path, task=pickplace_task)
     assert other.run.session.n_demos == 0 and "Could not resume" in other.message
     bad = tmp_path / "bad.json"
     bad.write_text('{"format": "lfd-tutor-session", "version": 1, "task": {"name": "pickpl')
     before = bad.read_text()
-    fresh = PickPlaceTutor("BF", session_file=bad, task=pickplace_task)
+    fresh = PickPlaceTutor("BF", run_file=bad, task=pickplace_task)
     fresh.demonstrate(5)
     assert bad.read_text() == before
 
@@ -98,7 +98,7 @@ def test_compare_runs_reports_the_paper(pickplace_task):
 def test_load_recorded_demos_keeps_the_chosen_plant(pickplace_task, tmp_path):
     from tutor.demofiles import BUNDLED_DIR
 
-    rf = PickPlaceTutor("RF", session_file=tmp_path / "rf.json", task=pickplace_task)
+    rf = PickPlaceTutor("RF", run_file=tmp_path / "rf.json", task=pickplace_task)
     rf.load(BUNDLED_DIR / "pickplace_wrong_plant.json")
     s = rf.run.session
     assert s.n_demos == 3 and "Added 3" in rf.message
@@ -202,7 +202,7 @@ def test_tray_map_is_laid_out_as_the_3d_camera_sees_it(pickplace_task):
 
 
 def test_the_run_ends_with_the_last_complete_demo_at_the_cap(pickplace_task, tmp_path):
-    app = PickPlaceTutor("BF", task=pickplace_task, seed=0, session_file=tmp_path / "bf.json")
+    app = PickPlaceTutor("BF", task=pickplace_task, seed=0, run_file=tmp_path / "bf.json")
     app.demonstrate(44)
     app.run.spend(app.run.remaining - 20)  # 20 s left: no demo and its 5 attempts fit
     app.demonstrate(0)

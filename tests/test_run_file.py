@@ -16,7 +16,7 @@ from tutor.demofiles import bundled_demos, save_demos
 from tutor.errors import InvalidParameterError
 from tutor.framework import RunRecord, Trainee
 from tutor.framework import controller as controller_module
-from tutor.runtime import session_dir, trainee_key
+from tutor.runtime import trainee_dir, trainee_key
 from tutor.tasks.maze_run import MazeRun
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.views.maze_app import MazeTutor
@@ -41,7 +41,7 @@ CHILD = textwrap.dedent(
     from tutor.demofiles import bundled_demos
     from tutor.views.maze_app import MazeTutor
     path, n = sys.argv[1], int(sys.argv[2])
-    app = MazeTutor("VF", session_file=path, trainee="Mai Anh")
+    app = MazeTutor("VF", run_file=path, trainee="Mai Anh")
     print("read_only", app.read_only, flush=True)
     print("message", app.message, flush=True)
     demos = bundled_demos("maze_good")
@@ -115,7 +115,7 @@ def test_a_killed_kernels_lock_is_taken_over(tmp_path):
     first.send_signal(signal.SIGKILL)
     first.wait(30)
     assert (tmp_path / ".VF.json.lock").exists()  # the lock file stays; the OS lock does not
-    app = MazeTutor("VF", session_file=path, trainee="Mai Anh")
+    app = MazeTutor("VF", run_file=path, trainee="Mai Anh")
     assert not app.read_only and app.session.n_demos == 2
 
 
@@ -123,9 +123,9 @@ def test_a_cell_run_again_takes_over_the_run_and_the_old_view_is_told(tmp_path, 
     """Re-running a tutor's cell makes a second tutor on the same file in the same kernel:
     the newer one carries on with every demo; the older one says so and is read-only."""
     path = tmp_path / "VF.json"
-    one = MazeTutor("VF", session_file=path)
+    one = MazeTutor("VF", run_file=path)
     one.add(good[0])
-    two = MazeTutor("VF", session_file=path)
+    two = MazeTutor("VF", run_file=path)
     assert not two.read_only and two.session.n_demos == 1
     assert one.read_only and "replaced by a newer one" in one.message
     assert "replaced by a newer one" in one.panel.value  # the old view was redrawn
@@ -139,8 +139,8 @@ def test_a_cell_run_again_takes_over_the_run_and_the_old_view_is_told(tmp_path, 
     two.add(good[1])
     assert len(_record(path)["attempts"][-1]["demos"]) == 2
     # a tutor for another run on the same file name takes nothing from the first
-    other = MazeTutor("VR", session_file=path)
-    assert not two.read_only and other.session_file.name == "VF-2.json"
+    other = MazeTutor("VR", run_file=path)
+    assert not two.read_only and other.run_file.name == "VF-2.json"
 
 
 def test_a_read_only_view_can_try_again_once_the_other_kernel_has_gone(tmp_path, good):
@@ -148,7 +148,7 @@ def test_a_read_only_view_can_try_again_once_the_other_kernel_has_gone(tmp_path,
     first = _child(path, 2)
     try:
         _read_until_ready(first)
-        view = MazeTutor("VF", session_file=path, trainee="Mai Anh")
+        view = MazeTutor("VF", run_file=path, trainee="Mai Anh")
         assert view.read_only and view.retry.layout.display != "none"
         view.retry.click()
         assert view.read_only and "still open in another tutor" in view.message
@@ -167,7 +167,7 @@ def test_a_read_only_view_can_try_again_once_the_other_kernel_has_gone(tmp_path,
 
 def test_reset_asks_for_a_second_click_and_keeps_the_attempt(tmp_path, good, monkeypatch):
     path = tmp_path / "VF.json"
-    app = MazeTutor("VF", session_file=path)
+    app = MazeTutor("VF", run_file=path)
     for d in good[:3]:
         app.add(d)
     app.finish()
@@ -193,13 +193,13 @@ def test_reset_asks_for_a_second_click_and_keeps_the_attempt(tmp_path, good, mon
 
 def test_undo_events_and_undone_demos_survive_resume(tmp_path, good):
     path = tmp_path / "VF.json"
-    app = MazeTutor("VF", session_file=path)
+    app = MazeTutor("VF", run_file=path)
     for d in good[:3]:
         app.add(d)
     app.undo()
     app.add(good[2])
     app.close()
-    again = MazeTutor("VF", session_file=path)
+    again = MazeTutor("VF", run_file=path)
     kinds = [e.kind for e in again.record.events]
     assert kinds == ["start", "add", "add", "add", "undo", "add"]
     assert len(again.run.attempt.undone) == 1 and again.session.n_demos == 3
@@ -208,10 +208,10 @@ def test_undo_events_and_undone_demos_survive_resume(tmp_path, good):
 
 
 def test_loading_another_runs_file_is_refused_and_nothing_changes(tmp_path, good):
-    vr = MazeTutor("VR", session_file=tmp_path / "VR.json")
+    vr = MazeTutor("VR", run_file=tmp_path / "VR.json")
     vr.add(good[0])
     vf_path = tmp_path / "VF.json"
-    vf = MazeTutor("VF", session_file=vf_path)
+    vf = MazeTutor("VF", run_file=vf_path)
     vf.add(good[1])
     before = vf_path.read_bytes()
     vf.load(tmp_path / "VR.json")
@@ -228,7 +228,7 @@ def test_loading_another_runs_file_is_refused_and_nothing_changes(tmp_path, good
 
 def test_loading_into_a_finished_run_is_refused(tmp_path, good):
     path = tmp_path / "VF.json"
-    app = MazeTutor("VF", session_file=path)
+    app = MazeTutor("VF", run_file=path)
     app.add(good[0])
     app.finish()
     before = path.read_bytes()
@@ -248,7 +248,7 @@ def test_same_run_file_loads_as_a_new_attempt(tmp_path, good):
         other.add_demo(d)
     other.save(tmp_path / "mine_from_home.json")
     path = tmp_path / "VF.json"
-    app = MazeTutor("VF", session_file=path)
+    app = MazeTutor("VF", run_file=path)
     app.add(good[3])
     app.load(tmp_path / "mine_from_home.json")
     assert app.session.n_demos == 2 and "attempt 2" in app.message
@@ -257,26 +257,26 @@ def test_same_run_file_loads_as_a_new_attempt(tmp_path, good):
 
 def test_a_file_of_another_run_is_never_overwritten(tmp_path, good):
     path = tmp_path / "NF.json"
-    vr = MazeTutor("VR", session_file=path)  # a VR run saved under the NF name
+    vr = MazeTutor("VR", run_file=path)  # a VR run saved under the NF name
     vr.add(good[0])
     vr.close()
     before = path.read_bytes()
-    nf = MazeTutor("NF", session_file=path)
-    assert nf.session_file.name == "NF-2.json" and "kept untouched" in nf.message
+    nf = MazeTutor("NF", run_file=path)
+    assert nf.run_file.name == "NF-2.json" and "kept untouched" in nf.message
     nf.add(good[1])
     assert path.read_bytes() == before
     nf.close()
-    again = MazeTutor("NF", session_file=path)  # the next time the NF run is found again
-    assert again.session_file.name == "NF-2.json" and again.session.n_demos == 1
+    again = MazeTutor("NF", run_file=path)  # the next time the NF run is found again
+    assert again.run_file.name == "NF-2.json" and again.session.n_demos == 1
 
 
 def test_another_trainees_file_is_not_resumed(tmp_path, good):
     path = tmp_path / "VF.json"
-    mai = MazeTutor("VF", session_file=path, trainee="Mai Anh")
+    mai = MazeTutor("VF", run_file=path, trainee="Mai Anh")
     mai.add(good[0])
     mai.close()
-    other = MazeTutor("VF", session_file=path, trainee="Mai_Anh")
-    assert other.session.n_demos == 0 and other.session_file.name == "VF-2.json"
+    other = MazeTutor("VF", run_file=path, trainee="Mai_Anh")
+    assert other.session.n_demos == 0 and other.run_file.name == "VF-2.json"
 
 
 # ---------------------------------------------------------------- failed saves
@@ -284,7 +284,7 @@ def test_another_trainees_file_is_not_resumed(tmp_path, good):
 
 def test_a_failed_save_keeps_the_demo_and_tries_again(tmp_path, good):
     folder = tmp_path / "runs"
-    app = MazeTutor("VF", session_file=folder / "VF.json")  # takes the file's lock
+    app = MazeTutor("VF", run_file=folder / "VF.json")  # takes the file's lock
     folder.rename(tmp_path / "moved")
     folder.write_text("a file where the folder should be")
     app.add(good[0])
@@ -301,7 +301,7 @@ def test_a_run_whose_folder_cannot_be_made_opens_read_only(tmp_path, good):
     """No lock can be taken (part of the path is a file): the tutor fails closed."""
     blocker = tmp_path / "not_a_folder"
     blocker.write_text("a file where the folder should be")
-    app = MazeTutor("VF", session_file=blocker / "VF.json")
+    app = MazeTutor("VF", run_file=blocker / "VF.json")
     assert app.read_only and "cannot be locked" in app.message
     app.add(good[0])
     assert app.session.n_demos == 0 and "read-only" in app.message
@@ -313,7 +313,7 @@ def test_a_run_whose_folder_cannot_be_made_opens_read_only(tmp_path, good):
 
 
 def test_no_exception_leaves_a_button(tmp_path, good, monkeypatch):
-    app = PickPlaceTutor("BF", session_file=tmp_path / "bf.json", seed=0)
+    app = PickPlaceTutor("BF", run_file=tmp_path / "bf.json", seed=0)
 
     def broken(*args, **kwargs):
         raise RuntimeError("a bug")
@@ -361,31 +361,31 @@ def test_bad_trainee_names_are_refused(name, monkeypatch):
 
 
 def test_session_dir_uses_the_key_and_refuses_a_file(tmp_path, monkeypatch):
-    monkeypatch.setenv("TUTOR_SESSION_DIR", str(tmp_path / "class"))
-    folder = session_dir("Zoë")
+    monkeypatch.setenv("TUTOR_RUNS_DIR", str(tmp_path / "class"))
+    folder = trainee_dir("Zoë")
     assert folder.parent == tmp_path / "class" and folder.name == trainee_key("Zoë")
-    assert session_dir("Zoe\u0308") == folder
+    assert trainee_dir("Zoe\u0308") == folder
     (tmp_path / "file").write_text("x")
-    monkeypatch.setenv("TUTOR_SESSION_DIR", str(tmp_path / "file"))
+    monkeypatch.setenv("TUTOR_RUNS_DIR", str(tmp_path / "file"))
     with pytest.raises(InvalidParameterError, match="is a file, not a folder"):
-        session_dir("Zoë")
+        trainee_dir("Zoë")
 
 
 def test_the_hub_user_is_the_default_trainee(tmp_path, monkeypatch):
     monkeypatch.setenv("JUPYTERHUB_USER", "student07")
-    app = MazeTutor("VF", session_file=tmp_path / "VF.json")
+    app = MazeTutor("VF", run_file=tmp_path / "VF.json")
     assert app.trainee.name == "student07"
     assert app.record.trainee == Trainee("student07", trainee_key("student07"))
 
 
 def test_practice_runs_are_marked_and_kept_apart(tmp_path, good):
     path = tmp_path / "VF.json"
-    practice = MazeTutor("VF", session_file=path, practice=True)
+    practice = MazeTutor("VF", run_file=path, practice=True)
     practice.add(good[0])
     practice.close()
     assert RunRecord.from_dict(_record(path)).practice
-    real = MazeTutor("VF", session_file=path)
-    assert real.session.n_demos == 0 and real.session_file.name == "VF-2.json"
+    real = MazeTutor("VF", run_file=path)
+    assert real.session.n_demos == 0 and real.run_file.name == "VF-2.json"
 
 
 def test_pickplace_load_is_all_or_nothing_with_a_malformed_condition(tmp_path):
@@ -397,7 +397,7 @@ def test_pickplace_load_is_all_or_nothing_with_a_malformed_condition(tmp_path):
         columns="txyzg",
         conditions=[task.conditions[0], [5.0, 5.0, 5.0]],  # demo 2 meant for nowhere
     )
-    app = PickPlaceTutor("BF", session_file=tmp_path / "bf.json")
+    app = PickPlaceTutor("BF", run_file=tmp_path / "bf.json")
     before = (app.run.n_demos, app.run.elapsed, app.record)
     app.load(path)
     assert "Nothing was loaded" in app.message and "demo 2" in app.message
@@ -405,7 +405,7 @@ def test_pickplace_load_is_all_or_nothing_with_a_malformed_condition(tmp_path):
 
 
 def test_bring_back_offers_the_latest_earlier_attempt(tmp_path, good):
-    app = MazeTutor("VF", session_file=tmp_path / "VF.json")
+    app = MazeTutor("VF", run_file=tmp_path / "VF.json")
     app.add(good[0])
     app.reset()
     app.add(good[1])

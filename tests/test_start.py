@@ -11,7 +11,7 @@ from tutor.demofiles import bundled_demos
 from tutor.errors import InvalidParameterError
 from tutor.framework.protocol import run_file_name
 from tutor.framework.record import RunRecord
-from tutor.runtime import default_trainee, session_dir
+from tutor.runtime import default_trainee, trainee_dir
 from tutor.views.start import HEADLESS_TRAINEE, maze_experiment
 from tutor.views.start_pickplace import condition_from_env, pick_and_place_experiment
 from tutor.views.worked_example import example_png, instruction_text, instruction_widget
@@ -69,7 +69,7 @@ def test_the_form_waits_for_start_and_shows_nf_first(person, tmp_path):
     assert kinds == ["HTML", "VBox", "HBox"]
     assert "lfd-instruction" in form.stage.children[1]._dom_classes
     nf = form.tutors[0]
-    assert nf.session_file == session_dir("Zoë") / "NF.json"
+    assert nf.run_file == trainee_dir("Zoë") / "NF.json"
     assert "1 of 3 runs are finished" not in form.results()
 
 
@@ -92,7 +92,7 @@ def test_each_run_appears_when_the_previous_is_finished(person):
     assert form.finished
     assert "VR: η =" in form.results()
     for condition in ("NF", "VF", "VR"):
-        record = read_record(session_dir("Ana") / f"{condition}.json")
+        record = read_record(trainee_dir("Ana") / f"{condition}.json")
         assert record.condition == condition
         assert record.trainee.name == "Ana" and not record.practice
 
@@ -115,7 +115,7 @@ def test_the_educator_fixes_the_name(person):
     assert form.name.disabled and form.name.value == "Group 4"
     assert "TUTOR_TRAINEE" in form.note.value
     form.go.click()
-    assert form.tutors[0].session_file.parent == session_dir("Group 4")
+    assert form.tutors[0].run_file.parent == trainee_dir("Group 4")
 
 
 def test_practice_runs_are_recorded_as_practice_in_their_own_files(person):
@@ -124,9 +124,9 @@ def test_practice_runs_are_recorded_as_practice_in_their_own_files(person):
     form.practice.value = True
     form.go.click()
     nf = form.tutors[0]
-    assert nf.session_file.name == "practice_NF.json"
+    assert nf.run_file.name == "practice_NF.json"
     teach_and_finish(nf, bundled_demos("maze_good")[:1])
-    assert read_record(nf.session_file).practice
+    assert read_record(nf.run_file).practice
     assert "practice run" in form.stage.children[1].children[0].value
 
 
@@ -179,7 +179,7 @@ def test_pick_and_place_runs_one_after_another_in_the_chosen_condition(person, c
     assert form.condition_buttons.disabled
     run1 = form.tutors[0]
     assert (run1.condition, run1.record.run) == (condition, 1)
-    assert run1.session_file.name == f"pickplace_{condition}_run1.json"
+    assert run1.run_file.name == f"pickplace_{condition}_run1.json"
     run1.buttons["Demonstrate"].click()
     demo = run1.run.attempt.demos[0]
     if condition == "AF":  # the robot tried the plants its selector picked
@@ -189,7 +189,7 @@ def test_pick_and_place_runs_one_after_another_in_the_chosen_condition(person, c
     run1.buttons["Finish run"].click()
     assert [t.record.run for t in form.tutors] == [1, 2]
     assert form.tutors[1].task is run1.task  # one task for all runs
-    record = read_record(run1.session_file)
+    record = read_record(run1.run_file)
     assert (record.trainee.name, record.condition, record.run) == ("Ana", condition, 1)
     assert form.save_scene(1) is None  # no 3-D view was asked for
 

@@ -10,7 +10,7 @@ import pytest
 from tutor.framework.assignment import ClassPlan
 from tutor.framework.protocol import EXPERIMENTS
 from tutor.framework.record import RunRecord
-from tutor.runtime import session_dir
+from tutor.runtime import trainee_dir
 from tutor.views.start import maze_experiment
 from tutor.views.start_pickplace import pick_and_place_experiment
 
@@ -39,7 +39,7 @@ def test_the_plan_assigns_and_locks_the_condition(plan):
     assert "Your educator's class plan assigns you RF (for Ana)." in f.note.value
     f.go.click()
     run1 = f.tutors[0]
-    assert run1.session_file == session_dir("Ana") / "pickplace_RF_run1.json"
+    assert run1.run_file == trainee_dir("Ana") / "pickplace_RF_run1.json"
     assert run1.condition == "RF" and f.condition_buttons.disabled
 
 
@@ -76,7 +76,7 @@ def test_the_hub_user_gets_their_condition_without_typing(plan, person):
     f.go.click()
     assert f.trainee == "student07"
     f.tutors[0].buttons["Demonstrate"].click()  # the run file is written at the first step
-    record = RunRecord.from_dict(json.loads(f.tutors[0].session_file.read_text("utf-8")))
+    record = RunRecord.from_dict(json.loads(f.tutors[0].run_file.read_text("utf-8")))
     assert (record.trainee.name, record.condition) == ("student07", "NF")
 
 
@@ -119,9 +119,9 @@ def test_a_started_condition_is_carried_on_when_the_plan_changes(plan):
     first = form()
     first.name.value = "Ana"
     first.go.click()
-    assert first.tutors[0].session_file.name == "pickplace_RF_run1.json"
+    assert first.tutors[0].run_file.name == "pickplace_RF_run1.json"
     first.tutors[0].buttons["Demonstrate"].click()  # the run is begun: its file is written
-    assert first.tutors[0].session_file.exists()
+    assert first.tutors[0].run_file.exists()
     plan.write_text("trainee,condition\nAna,BF\n", encoding="utf-8")
     again = form()
     again.name.value = "Ana"
@@ -134,7 +134,7 @@ def test_a_started_condition_is_carried_on_when_the_plan_changes(plan):
     practice.name.value = "Ana"
     practice.practice.value = True
     practice.go.click()
-    assert practice.tutors[0].session_file.name == "practice_pickplace_BF_run1.json"
+    assert practice.tutors[0].run_file.name == "practice_pickplace_BF_run1.json"
 
 
 def test_without_a_plan_the_trainee_chooses(person):

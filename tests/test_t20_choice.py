@@ -347,7 +347,7 @@ def test_controls_step_and_the_worked_example():
 
 def capped(task, tmp_path):
     """A BF tutor whose second demo the 15-minute cap ended the run with."""
-    app = PickPlaceTutor("BF", task=task, seed=0, session_file=tmp_path / "bf.json")
+    app = PickPlaceTutor("BF", task=task, seed=0, run_file=tmp_path / "bf.json")
     app.demonstrate(44)
     app.run.spend(app.run.remaining - 160.0)  # one more demo and its 5 attempts fit
     app.demonstrate(0)
@@ -373,12 +373,12 @@ def test_one_undo_after_the_cap_ended_the_run(pickplace_task, tmp_path):
     with pytest.raises(RunOverError, match="its one Undo is used"):
         run.undo()
     # the saved file holds the undo after the finish, and reads back
-    saved = RunRecord.from_dict(json.loads(app.session_file.read_text(encoding="utf-8")))
+    saved = RunRecord.from_dict(json.loads(app.run_file.read_text(encoding="utf-8")))
     assert saved.current.n_demos == 1 and [e.kind for e in saved.events][-2:] == [
         "finish",
         "undo",
     ]
-    resumed = PickPlaceTutor("BF", task=pickplace_task, session_file=app.session_file)
+    resumed = PickPlaceTutor("BF", task=pickplace_task, run_file=app.run_file)
     assert resumed.run.n_demos == 1 and not resumed.run.can_undo
 
 

@@ -122,7 +122,7 @@ def test_runs_in_another_condition_need_a_confirmation(person):
     assert f.confirm.layout.display is None  # the Start anyway button is shown
     f.confirm.click()
     assert f.trainee == "Ana" and f.tutors[0].condition == "SF"
-    assert f.tutors[0].session_file.name == "pickplace_SF_run1.json"
+    assert f.tutors[0].run_file.name == "pickplace_SF_run1.json"
     assert f.confirm.disabled and f.confirm.layout.display == "none"
 
 
@@ -238,7 +238,7 @@ def test_used_and_left_add_up_to_the_cap_whatever_the_fraction(pickplace_task):
 
 
 def test_the_cap_that_ends_a_run_names_the_demo_and_agrees_with_the_clock(pickplace_task, tmp_path):
-    app = PickPlaceTutor("BF", task=pickplace_task, seed=0, session_file=tmp_path / "bf.json")
+    app = PickPlaceTutor("BF", task=pickplace_task, seed=0, run_file=tmp_path / "bf.json")
     app.demonstrate(44)
     assert "lfd-cap" not in app.panel.value  # far from the cap: nothing said
     app.run.spend(app.run.remaining - 160.0)  # one demo and its 5 attempts fit, not two
@@ -276,7 +276,7 @@ def test_a_resumed_run_over_the_cap_says_so_before_finish(pickplace_task, tmp_pa
     run.demonstrate(5, rng=np.random.default_rng(4))
     run.spend(run.remaining - 100.0)  # 1:40 left: less than a demo and 5 attempts
     path = run.save(tmp_path / "run.json")
-    app = PickPlaceTutor("BF", task=pickplace_task, session_file=path)
+    app = PickPlaceTutor("BF", task=pickplace_task, run_file=path)
     assert app.run.out_of_time and app.run.attempt.stopped == ""
     said = cap_numbers(app.panel.value)
     assert (said["demo"], said["kept"], said["left"]) == (2, 1, 100)

@@ -26,7 +26,7 @@ def own(pickplace_task, monkeypatch, tmp_path):
     scene = Scene3D(task=pickplace_task, mode="static")
     assert scene.widget is not None  # the view as a browser would have it
     return PickPlaceTutor(
-        "RF", task=pickplace_task, scene3d=scene, seed=3, session_file=tmp_path / "rf.json"
+        "RF", task=pickplace_task, scene3d=scene, seed=3, run_file=tmp_path / "rf.json"
     )
 
 
@@ -64,7 +64,7 @@ def test_a_guided_demonstration_counts_its_duration_and_setup(own, pickplace_tas
     duration = raw[-1, 0] - raw[0, 0]
     # the demo, its setup and RF's one replay (25 s)
     assert spent == pytest.approx(duration + 2.5 + 25.0, abs=0.05)
-    saved = json.loads(own.session_file.read_text())
+    saved = json.loads(own.run_file.read_text())
     assert "own" in json.dumps(saved)
 
 
@@ -104,13 +104,13 @@ def test_a_recording_the_tutor_cannot_use_is_refused_and_nothing_changes(
 ):
     own.guide_as_steady_hand(30)
     before = _state(own)
-    saved = own.session_file.read_bytes()
+    saved = own.run_file.read_bytes()
     raw = steady_hand(pickplace_task, 31, np.random.default_rng(1))
     own.select(31)
     own.guide()
     _end(own, spoil(raw))
     assert _state(own) == before, own.message
-    assert own.session_file.read_bytes() == saved
+    assert own.run_file.read_bytes() == saved
     assert re.search(words, own.message, re.I), own.message
 
 

@@ -84,7 +84,7 @@ def maze_tutor(tmp_path_factory):
     from tutor.views.maze_app import MazeTutor
 
     path = tmp_path_factory.mktemp("maze") / "VF.json"
-    app = MazeTutor("VF", session_file=path, trainee="Mai Anh")
+    app = MazeTutor("VF", run_file=path, trainee="Mai Anh")
     app.pad.draw(GOOD)
     return app
 
@@ -92,14 +92,14 @@ def maze_tutor(tmp_path_factory):
 @pytest.mark.parametrize("stroke", BAD_STROKES.values(), ids=BAD_STROKES.keys())
 def test_a_bad_stroke_from_the_page_is_said_in_the_panel_and_adds_nothing(maze_tutor, stroke):
     app = maze_tutor
-    saved = app.session_file.read_text()
+    saved = app.run_file.read_text()
     n = app.session.n_demos
     # what the widget's comm does with an update from the page
     app.pad.set_state({"stroke": stroke, "stroke_count": app.pad.stroke_count + 1})
     assert app.session.n_demos == n
     assert app.message.startswith("That stroke was not used") and "stroke" in app.message
     assert "not used" in app.panel.value
-    assert app.session_file.read_text() == saved
+    assert app.run_file.read_text() == saved
 
 
 def test_a_good_stroke_from_the_page_is_added(maze_tutor):
@@ -205,8 +205,8 @@ def test_a_name_with_a_lone_surrogate_typed_in_the_form_starts_saves_and_prints(
     assert form.trainee == "a\ufffd" and form.problem is None
     tutor = form.current
     tutor.pad.draw(GOOD)
-    assert tutor.session_file.is_file() and not tutor.unsaved
-    assert json.loads(tutor.session_file.read_text())["trainee"]["name"] == "a\ufffd"
+    assert tutor.run_file.is_file() and not tutor.unsaved
+    assert json.loads(tutor.run_file.read_text())["trainee"]["name"] == "a\ufffd"
     assert "a\ufffd".encode() in _strict_print(form.note.value, tutor.status.value)
 
 
@@ -316,16 +316,16 @@ def test_check_path_length_refuses_a_long_name_or_path_before_the_file_system_do
 def test_tutor_session_dir_too_long_is_a_named_error_and_said_by_the_form(person, tmp_path,
                                                                          where):
     from tutor.errors import InvalidParameterError
-    from tutor.runtime import session_dir
+    from tutor.runtime import trainee_dir
     from tutor.views.start import MazeExperiment
 
-    person.setenv("TUTOR_SESSION_DIR", str(tmp_path / where))
-    with pytest.raises(InvalidParameterError, match="TUTOR_SESSION_DIR"):
-        session_dir("Mai Anh")
+    person.setenv("TUTOR_RUNS_DIR", str(tmp_path / where))
+    with pytest.raises(InvalidParameterError, match="TUTOR_RUNS_DIR"):
+        trainee_dir("Mai Anh")
     form = MazeExperiment(start=False)
     form.name.value = "Mai Anh"
     form.go.click()
-    assert form.trainee is None and "TUTOR_SESSION_DIR" in form.problem
+    assert form.trainee is None and "TUTOR_RUNS_DIR" in form.problem
 
 
 def test_a_run_file_path_too_long_is_a_named_error(tmp_path):
@@ -333,8 +333,8 @@ def test_a_run_file_path_too_long_is_a_named_error(tmp_path):
     from tutor.views.maze_app import MazeTutor
 
     for where in (LONG_NAME, DEEP):
-        with pytest.raises(InvalidParameterError, match="session_file"):
-            MazeTutor("VF", session_file=tmp_path / where / "VF.json", trainee="Mai")
+        with pytest.raises(InvalidParameterError, match="run_file"):
+            MazeTutor("VF", run_file=tmp_path / where / "VF.json", trainee="Mai")
 
 
 @pytest.mark.parametrize(
@@ -358,12 +358,12 @@ def test_out_too_long_is_refused_in_one_line_before_any_work(tmp_path, capsys, a
     assert err.count("\n") == 1 and "Traceback" not in err
 
 
-@pytest.mark.parametrize("option", ["sessions", "--plan"])
+@pytest.mark.parametrize("option", ["class_folder", "--plan"])
 def test_a_class_folder_or_plan_too_long_is_refused(tmp_path, capsys, option):
     from tutor.__main__ import main
 
     where = str(tmp_path / DEEP)
-    argv = ["class", where if option == "sessions" else str(tmp_path), "--experiment", "1"]
+    argv = ["class", where if option == "class_folder" else str(tmp_path), "--experiment", "1"]
     if option == "--plan":
         argv += ["--plan", where]
     assert main(argv) == 2
@@ -420,11 +420,11 @@ def test_no_name_and_none_set_is_refused_by_session_dir(person):
     from tutor.errors import InvalidParameterError
     from tutor.framework import Trainee
     from tutor.framework.record import CODE_TRAINEE
-    from tutor.runtime import default_trainee, session_dir
+    from tutor.runtime import default_trainee, trainee_dir
 
     assert default_trainee() is None
     with pytest.raises(InvalidParameterError, match="no name was given"):
-        session_dir(None)
+        trainee_dir(None)
     for blank in ("", "  ", "\u200b"):
         with pytest.raises(InvalidParameterError, match="empty"):
             Trainee.from_name(blank)

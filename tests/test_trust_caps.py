@@ -139,7 +139,7 @@ def test_an_upload_over_its_cap_is_refused_unwritten(tmp_path):
     from tutor.views.maze_app import MazeTutor
     from tutor.views.uploads import on_upload
 
-    app = MazeTutor("VF", session_file=tmp_path / "vf.json")
+    app = MazeTutor("VF", run_file=tmp_path / "vf.json")
     before = sorted(Path(os.environ.get("TMPDIR", "/tmp")).glob("lfd-upload-*"))
     on_upload(app.load, app.tell)(_upload("big.csv", b"x" * (limits.MAX_UPLOAD_BYTES + 1)))
     assert "larger than the 10 MB an upload can be" in app.message
@@ -157,7 +157,7 @@ def test_a_run_takes_no_demo_beyond_its_cap(monkeypatch, tmp_path):
     assert run_module.MAX_DEMOS_PER_RUN is limits.MAX_DEMOS_PER_RUN
     monkeypatch.setattr(run_module, "MAX_DEMOS_PER_RUN", 3)
     demos = list(bundled_demos("maze_good"))
-    app = MazeTutor("VF", session_file=tmp_path / "vf.json")
+    app = MazeTutor("VF", run_file=tmp_path / "vf.json")
     run = app.run
     for demo in demos[:3]:
         run.add_demo(demo)
@@ -180,7 +180,7 @@ def test_the_tutor_says_so_when_a_file_would_take_the_run_over_its_cap(tmp_path)
 
     demo = [[0.0, 0.1, 0.2], [1.0, 0.1, 0.2]]
     path = save_demos(tmp_path / "many.json", [demo] * 101)
-    app = MazeTutor("VF", session_file=tmp_path / "vf.json")
+    app = MazeTutor("VF", run_file=tmp_path / "vf.json")
     app.load(path)
     assert "Nothing was loaded" in app.message and "more than 100" in app.message
     assert app.session.n_demos == 0

@@ -51,7 +51,7 @@ def test_a_lock_path_that_is_a_folder_opens_read_only_and_changes_nothing(tmp_pa
     _saved_run(good, 2).save(path)
     before = path.read_bytes()
     _lock_of(path).mkdir()
-    app = MazeTutor("VF", session_file=path, trainee=TRAINEE)
+    app = MazeTutor("VF", run_file=path, trainee=TRAINEE)
     assert app.read_only and app.session.n_demos == 2  # the run is shown as it is
     assert "cannot be locked" in app.message and "folder" in app.message
     assert "read-only" in app.message and "nothing you do here is saved" in app.message
@@ -83,7 +83,7 @@ def test_a_new_run_whose_lock_is_a_folder_writes_no_file(tmp_path, good):
     path = tmp_path / "runs" / "VF.json"
     path.parent.mkdir()
     _lock_of(path).mkdir()
-    app = MazeTutor("VF", session_file=path, trainee=TRAINEE)
+    app = MazeTutor("VF", run_file=path, trainee=TRAINEE)
     assert app.read_only and app.session.n_demos == 0
     app.add(good[0])
     assert app.session.n_demos == 0 and not path.exists()
@@ -111,7 +111,7 @@ def test_a_stale_lock_that_may_not_be_written_opens_read_only(tmp_path, good, im
     _saved_run(good, 1).save(path)
     before = path.read_bytes()
     immutable(_lock_of(path))
-    app = MazeTutor("VF", session_file=path, trainee=TRAINEE)
+    app = MazeTutor("VF", run_file=path, trainee=TRAINEE)
     assert app.read_only and "may not be written by you" in app.message
     app.add(good[1])
     assert app.session.n_demos == 1 and path.read_bytes() == before
@@ -123,7 +123,7 @@ CHILD = textwrap.dedent(
     from tutor.demofiles import bundled_demos
     from tutor.views.maze_app import MazeTutor
     demos = bundled_demos("maze_good")
-    app = MazeTutor("VF", session_file=sys.argv[1], trainee=sys.argv[2])
+    app = MazeTutor("VF", run_file=sys.argv[1], trainee=sys.argv[2])
     print("open", app.read_only, flush=True)
     for line in sys.stdin:
         for i in range(int(line)):
@@ -176,7 +176,7 @@ def test_two_tutors_where_one_cannot_lock_only_one_writes(tmp_path, good, blocke
             _lock_of(path).rmdir()
         else:
             subprocess.run(["chattr", "-i", str(_lock_of(path))], check=True)
-        app = MazeTutor("VF", session_file=path, trainee=TRAINEE)
+        app = MazeTutor("VF", run_file=path, trainee=TRAINEE)
         assert not app.read_only, app.message
         for demo in good[:4]:
             app.add(demo)
@@ -194,10 +194,10 @@ def test_two_tutors_where_one_cannot_lock_only_one_writes(tmp_path, good, blocke
 
 def test_a_closed_tutor_writes_nothing_more(tmp_path, good):
     path = tmp_path / "VF.json"
-    app = MazeTutor("VF", session_file=path, trainee=TRAINEE)
+    app = MazeTutor("VF", run_file=path, trainee=TRAINEE)
     app.add(good[0])
     app.close()
-    other = MazeTutor("VF", session_file=path, trainee=TRAINEE)  # another tutor takes it over
+    other = MazeTutor("VF", run_file=path, trainee=TRAINEE)  # another tutor takes it over
     other.add(good[1])
     before = path.read_bytes()
     app.add(good[2])
@@ -209,9 +209,9 @@ def test_a_closed_tutor_writes_nothing_more(tmp_path, good):
 
 def test_the_saved_copy_of_a_read_only_view_is_refused_too(tmp_path, good):
     path = tmp_path / "VF.json"
-    one = MazeTutor("VF", session_file=path, trainee=TRAINEE)
+    one = MazeTutor("VF", run_file=path, trainee=TRAINEE)
     one.add(good[0])
-    MazeTutor("VF", session_file=path, trainee=TRAINEE)  # its cell run again
+    MazeTutor("VF", run_file=path, trainee=TRAINEE)  # its cell run again
     assert one.read_only
     assert one.save(tmp_path / "copy.json") is None and "Nothing was saved" in one.message
     assert not (tmp_path / "copy.json").exists()
@@ -221,14 +221,14 @@ def test_the_saved_copy_of_a_read_only_view_is_refused_too(tmp_path, good):
 
 
 def test_save_onto_another_runs_file_is_refused_and_leaves_it_byte_identical(tmp_path, good):
-    vr = MazeTutor("VR", session_file=tmp_path / "VR.json", trainee=TRAINEE)
+    vr = MazeTutor("VR", run_file=tmp_path / "VR.json", trainee=TRAINEE)
     vr.add(good[0])
-    theirs = MazeTutor("VF", session_file=tmp_path / "zoe" / "VF.json", trainee="Zoë")
+    theirs = MazeTutor("VF", run_file=tmp_path / "zoe" / "VF.json", trainee="Zoë")
     theirs.add(good[1])
     earlier = _saved_run(good, 3)  # Mai Anh's VF run of another day: another run id
     earlier.save(tmp_path / "VF-old.json")
     save_demos(tmp_path / "demos.csv", list(good[:2]))
-    app = MazeTutor("VF", session_file=tmp_path / "mine" / "VF.json", trainee=TRAINEE)
+    app = MazeTutor("VF", run_file=tmp_path / "mine" / "VF.json", trainee=TRAINEE)
     app.add(good[2])
     others = {
         "VR.json": ("VR run", WrongRunError),
@@ -249,7 +249,7 @@ def test_save_onto_another_runs_file_is_refused_and_leaves_it_byte_identical(tmp
 
 def test_save_onto_its_own_file_a_copy_or_a_new_name_still_works(tmp_path, good):
     path = tmp_path / "VF.json"
-    app = MazeTutor("VF", session_file=path, trainee=TRAINEE)
+    app = MazeTutor("VF", run_file=path, trainee=TRAINEE)
     app.add(good[0])
     assert app.save(path) == path and "Saved to" in app.message
     copy = tmp_path / "copies" / "VF-copy.json"
@@ -348,9 +348,9 @@ def test_resuming_a_contradictory_run_file_is_refused_and_the_file_kept(tmp_path
     path = tmp_path / "VR.json"
     path.write_text(json.dumps(_edited(history, lambda d: d["events"][6].update(n_demos=99))))
     before = path.read_bytes()
-    app = MazeTutor("VR", session_file=path, trainee=TRAINEE)
+    app = MazeTutor("VR", run_file=path, trainee=TRAINEE)
     assert "Could not resume from VR.json" in app.message and "claims 99" in app.message
-    assert "kept untouched" in app.message and app.session_file.name == "VR-2.json"
+    assert "kept untouched" in app.message and app.run_file.name == "VR-2.json"
     app.add(good[0])
     assert app.session.n_demos == 1 and path.read_bytes() == before
     with pytest.raises(InvalidFileError, match="VR.json: .*claims 99"):

@@ -88,7 +88,7 @@ def _shown_etas(experiment, run, folder, path) -> dict[str, str]:
     shown = {}
     app_module = maze_app if experiment == 1 else pickplace_app
     tutor_class = maze_app.MazeTutor if experiment == 1 else pickplace_app.PickPlaceTutor
-    tutor = tutor_class(run.condition, session_file=path, task=run.task, trainee=TRAINEE)
+    tutor = tutor_class(run.condition, run_file=path, task=run.task, trainee=TRAINEE)
     assert tutor.run.finished and tutor.run.n_demos == run.n_demos
     summary = _text(tutor.panel.value)
     assert summary.count("η = ") == 1, summary  # one score after Finish

@@ -65,7 +65,7 @@ def test_the_change_sentence_follows_the_points_shown(delta, points, words):
 
 
 def test_the_incorrect_cell_says_the_direction_of_its_own_number(maze_task):
-    # what notebook 01's "Failure 1" cell computes, on the bundled set it uses
+    # what notebook 01's "MainCause 1" cell computes, on the bundled set it uses
     wrong = TeachingSession(maze_task)
     for demo in bundled_demos("maze_incorrect")[:3]:
         wrong.add_demo(demo)

@@ -256,15 +256,16 @@ def _paths_that_fail(layout):
 
 def test_classify_reads_the_maze_tasks_own_reasons(maze_task):
     from tutor.framework.task import Reason
-    from tutor.views.maze_reasons import classify, failures
+    from tutor.views.maze_reasons import classify, main_causes
 
     paths = _paths_that_fail(maze_task.layout)
     verdict = maze_task.judge(paths)
     assert verdict.passed.tolist() == [True, False, False, False, False]
     kinds = [classify(r).kind for r in verdict.causes]
     assert kinds == ["pass", "obstacle", "outside", "miss", "miss"]
-    assert classify(verdict.causes[1]).obstacle == "obstacle 2"
-    found = failures(paths, verdict.causes, maze_task.layout)
+    assert classify(verdict.causes[1], maze_task.layout).obstacle == "obstacle 2"
+    assert classify(verdict.causes[1]).obstacle == "obstacle 2"  # numbered without one
+    found = main_causes(paths, verdict.causes, maze_task.layout)
     np.testing.assert_allclose(found[1].point, [0.15, 0.195])  # where it went in
     np.testing.assert_allclose(found[2].point, [0.25, 0.10])
     assert found[3].miss == pytest.approx(0.003, abs=1e-6)  # from the target's edge
@@ -276,11 +277,11 @@ def test_classify_reads_the_maze_tasks_own_reasons(maze_task):
 
 
 def test_reason_summary_counts_each_cause(maze_task):
-    from tutor.views.maze_reasons import failures, reason_summary
+    from tutor.views.maze_reasons import main_causes, reason_summary
 
     paths = _paths_that_fail(maze_task.layout)
     paths = np.concatenate([paths, paths[3:4] + [0.0, -0.001]])  # a second near miss, 4 mm
-    found = failures(paths, maze_task.judge(paths).causes, maze_task.layout)
+    found = main_causes(paths, maze_task.judge(paths).causes, maze_task.layout)
     text = reason_summary(found)
     assert text.startswith("2 miss the target by 3–4 mm; ")
     assert "1 hits obstacle 2" in text and "1 leaves the maze" in text

@@ -147,7 +147,7 @@ def _parser() -> argparse.ArgumentParser:
         "class", help="the paper's statistics on a class's own saved runs"
     )
     cls.add_argument(
-        "sessions",
+        "class_folder",
         help="the class folder (one subfolder or one .zip per trainee) or a .zip of it",
     )
     cls.add_argument(
@@ -179,7 +179,7 @@ def class_command(args) -> None:
     from .study.classroom import read_class
     from .study.report import check_out_dir
 
-    check_path_length(args.sessions, "the class folder", InvalidFileError)
+    check_path_length(args.class_folder, "the class folder", InvalidFileError)
     if args.plan is not None:
         check_path_length(args.plan, "--plan", InvalidFileError)
     if args.out is not None:
@@ -192,7 +192,7 @@ def class_command(args) -> None:
         from .study import class_report  # noqa: F401
 
     result = read_class(
-        args.sessions, args.experiment, workers=args.workers, plan=args.plan,
+        args.class_folder, args.experiment, workers=args.workers, plan=args.plan,
         meanwhile=load_the_rest, progress=False if args.no_progress else None,
     )
     from .study.class_report import analyse_class, format_class_report, save_class

@@ -91,7 +91,7 @@ class SaveError(TutorError, OSError):
 
 
 class SessionInUseError(TutorError, RuntimeError):
-    """Another tutor or kernel is writing this session file (it holds the file's lock)."""
+    """Another tutor or kernel is writing this run file (it holds the file's lock)."""
 
 
 class LockError(TutorError, RuntimeError):

@@ -143,7 +143,7 @@ def check_path_length(path, what: str, error: type[Exception] = InvalidParameter
     ----------
     path : str or os.PathLike
     what : str
-        How to call it in the message (e.g. ``"TUTOR_SESSION_DIR"``, ``"--out"``).
+        How to call it in the message (e.g. ``"TUTOR_RUNS_DIR"``, ``"--out"``).
     error : type
         The :mod:`tutor.errors` class to raise.
     room : int

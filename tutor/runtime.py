@@ -5,7 +5,7 @@ mode: cells that would wait for a person instead feed bundled demonstrations.
 nbmake runs a real kernel, so "am I in a notebook?" checks cannot tell a test from a
 person; the environment variable can.
 
-``TUTOR_SESSION_DIR`` moves where teaching runs are saved (default ``./sessions`` next to
+``TUTOR_RUNS_DIR`` moves where teaching runs are saved (default ``./sessions`` next to
 the notebooks); each trainee gets a folder of their own inside it.
 
 Trainee folders. A trainee's folder key is derived from their name *injectively*: the
@@ -33,8 +33,8 @@ from .fileio import check_path_length
 
 __all__ = [
     "headless",
-    "session_dir",
-    "sessions_root",
+    "trainee_dir",
+    "runs_root",
     "trainee_key",
     "normalise_name",
     "default_trainee",
@@ -45,8 +45,8 @@ __all__ = [
 
 #: embedding and override controls: they reorder text on screen, so they are refused
 _DIRECTION_CONTROLS = set("\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
-#: bytes kept free below TUTOR_SESSION_DIR: a trainee's folder and the files in it
-SESSION_ROOM = 200
+#: bytes kept free below TUTOR_RUNS_DIR: a trainee's folder and the files in it
+RUNS_ROOM = 200
 #: the readable part of a folder key is at most this long
 _READABLE = 40
 _HASH_CHARS = 10
@@ -159,23 +159,23 @@ NO_NAME = (
 )
 
 
-def sessions_root() -> Path:
-    """The folder that holds every trainee's folder (``TUTOR_SESSION_DIR`` or ./sessions).
+def runs_root() -> Path:
+    """The folder that holds every trainee's folder (``TUTOR_RUNS_DIR`` or ./runs).
 
     Raises
     ------
     InvalidParameterError
-        ``TUTOR_SESSION_DIR`` holds a NUL character, or it is too long for the file
+        ``TUTOR_RUNS_DIR`` holds a NUL character, or it is too long for the file
         system with room for a trainee's folder and files
         (:func:`tutor.fileio.check_path_length`).
     """
-    base = os.environ.get("TUTOR_SESSION_DIR", "").strip() or "sessions"
+    base = os.environ.get("TUTOR_RUNS_DIR", "").strip() or "runs"
     if "\x00" in base:
-        raise InvalidParameterError("TUTOR_SESSION_DIR holds a NUL character: set it to a folder")
-    return check_path_length(base, "TUTOR_SESSION_DIR", room=SESSION_ROOM)
+        raise InvalidParameterError("TUTOR_RUNS_DIR holds a NUL character: set it to a folder")
+    return check_path_length(base, "TUTOR_RUNS_DIR", room=RUNS_ROOM)
 
 
-def session_dir(trainee=None) -> Path:
+def trainee_dir(trainee=None) -> Path:
     """The folder for one trainee's run files (created if needed).
 
     ``trainee`` None is :func:`default_trainee`'s name (refused when there is none).
@@ -183,15 +183,15 @@ def session_dir(trainee=None) -> Path:
     Raises
     ------
     InvalidParameterError
-        The name is empty or missing, or ``TUTOR_SESSION_DIR`` is a file rather than a folder, or
+        The name is empty or missing, or ``TUTOR_RUNS_DIR`` is a file rather than a folder, or
         too long.
     SaveError
         The folder cannot be made (no permission, a read-only disk).
     """
-    root = sessions_root()
+    root = runs_root()
     if root.exists() and not root.is_dir():
         raise InvalidParameterError(
-            f"TUTOR_SESSION_DIR is {root}, which is a file, not a folder: point it at a "
+            f"TUTOR_RUNS_DIR is {root}, which is a file, not a folder: point it at a "
             "folder (it is made if missing)"
         )
     name = default_trainee() if trainee is None else trainee
@@ -203,6 +203,6 @@ def session_dir(trainee=None) -> Path:
     except OSError as exc:
         raise SaveError(
             f"cannot make the folder {folder} for the trainee's runs ({exc.strerror or exc}); "
-            "set TUTOR_SESSION_DIR to a folder you can write to"
+            "set TUTOR_RUNS_DIR to a folder you can write to"
         ) from exc
     return folder

@@ -1,7 +1,7 @@
 """Fixtures for browser tests: real servers on loopback and Debian's headless chromium.
 
 Each server gets a free port on 127.0.0.1, a copy of the notebooks (so the browser's
-autosave never writes outputs into the repository) and its own session folder.
+autosave never writes outputs into the repository) and its own runs folder.
 """
 
 from __future__ import annotations
@@ -136,7 +136,7 @@ def workdir(tmp_path_factory):
     root = tmp_path_factory.mktemp("browser")
     shutil.copytree(REPO / "notebooks", root / "notebooks")
     env = {k: v for k, v in os.environ.items() if k != "TUTOR_HEADLESS"}  # a person, not CI
-    env["TUTOR_SESSION_DIR"] = str(root / "sessions")
+    env["TUTOR_RUNS_DIR"] = str(root / "sessions")
     return root, env
 
 
@@ -223,7 +223,7 @@ def voila_server(root: Path, env: dict, notebook: str):
 @pytest.fixture(scope="module")
 def voila(workdir):
     root, env = workdir
-    env = {**env, "TUTOR_SESSION_DIR": str(root / "voila-sessions")}
+    env = {**env, "TUTOR_RUNS_DIR": str(root / "voila-sessions")}
     with voila_server(root, env, "02_maze_experiment.ipynb") as url:
         yield url
 

@@ -123,17 +123,17 @@ def _start(page, condition: str, trainee: str):
 
 
 def _run_file(session_root, trainee: str, condition: str) -> dict:
-    from tutor.runtime import session_dir
+    from tutor.runtime import trainee_dir
 
-    before = os.environ.get("TUTOR_SESSION_DIR")
-    os.environ["TUTOR_SESSION_DIR"] = str(session_root)
+    before = os.environ.get("TUTOR_RUNS_DIR")
+    os.environ["TUTOR_RUNS_DIR"] = str(session_root)
     try:
-        folder = session_dir(trainee)
+        folder = trainee_dir(trainee)
     finally:
         if before is None:
-            del os.environ["TUTOR_SESSION_DIR"]
+            del os.environ["TUTOR_RUNS_DIR"]
         else:
-            os.environ["TUTOR_SESSION_DIR"] = before
+            os.environ["TUTOR_RUNS_DIR"] = before
     return json.loads((folder / f"pickplace_{condition}_run1.json").read_text())
 
 
@@ -276,7 +276,7 @@ def test_five_own_hand_demos_in_jupyterlab(lab_page, workdir, condition):
     teach_five(
         page, condition, trainee, figures, axe_name="own_hand_lab" if condition == "NF" else None
     )
-    check_run_file(_run_file(env["TUTOR_SESSION_DIR"], trainee, condition), condition, figures)
+    check_run_file(_run_file(env["TUTOR_RUNS_DIR"], trainee, condition), condition, figures)
 
 
 # ---------------------------------------------------------------- Voila
@@ -287,7 +287,7 @@ def voila_own_hand(browser, workdir):
     root, env = workdir
     _write_notebook(root / "notebooks")
     sessions = root / "voila-own-hand-sessions"
-    env = {**env, "TUTOR_SESSION_DIR": str(sessions)}
+    env = {**env, "TUTOR_RUNS_DIR": str(sessions)}
     with voila_server(root, env, NOTEBOOK) as url:
         context = browser.new_context(viewport={"width": 1400, "height": 1000})
         page = context.new_page()

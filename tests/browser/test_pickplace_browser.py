@@ -66,20 +66,20 @@ def _write_run_near_the_cap(folder, task, run: int, left: float, seed: int):
 def runs_near_the_cap(workdir):
     """Run 2 with 1 s less than its first demo needs (the notebook's seed 2), run 3 with
     less than the shortest demo needs; written where notebook 03 resumes them."""
-    from tutor.runtime import session_dir
+    from tutor.runtime import trainee_dir
     from tutor.tasks.pickplace import PickPlaceTask
 
     root, env = workdir
     task = PickPlaceTask()
-    before = os.environ.get("TUTOR_SESSION_DIR")
-    os.environ["TUTOR_SESSION_DIR"] = env["TUTOR_SESSION_DIR"]
+    before = os.environ.get("TUTOR_RUNS_DIR")
+    os.environ["TUTOR_RUNS_DIR"] = env["TUTOR_RUNS_DIR"]
     try:
-        folder = session_dir(BROWSER_TRAINEE)
+        folder = trainee_dir(BROWSER_TRAINEE)
     finally:
         if before is None:
-            del os.environ["TUTOR_SESSION_DIR"]
+            del os.environ["TUTOR_RUNS_DIR"]
         else:
-            os.environ["TUTOR_SESSION_DIR"] = before
+            os.environ["TUTOR_RUNS_DIR"] = before
     # the tutor's hand in run 2 is seeded 2 and guides the arm to plant 44 first
     first = task.duration(task.demonstrate(44, np.random.default_rng(2)))
     two = _write_run_near_the_cap(folder, task, 2, first + 125.0 - 1.0, seed=20)

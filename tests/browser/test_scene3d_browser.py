@@ -64,7 +64,7 @@ def voila_scene(workdir):
     proc = subprocess.Popen(
         [sys.executable, "-m", "voila", str(nb), "--no-browser", f"--port={port}"]
         + ["--Voila.ip=127.0.0.1"],
-        env={**env, "TUTOR_SESSION_DIR": str(root / "scene3d-sessions")},
+        env={**env, "TUTOR_RUNS_DIR": str(root / "scene3d-sessions")},
         stdout=log,
         stderr=subprocess.STDOUT,
         cwd=root,

@@ -254,7 +254,7 @@ class Hub:
             ),
         )
         # the kit puts each trainee's folder under the class folder itself
-        env.pop("TUTOR_SESSION_DIR", None)
+        env.pop("TUTOR_RUNS_DIR", None)
         return env
 
     def start(self, timeout: float = 120.0) -> Hub:

@@ -319,7 +319,7 @@ def check_server_environment(hub: Hub, users) -> None:
     assert set(servers) == set(users), sorted(servers)
     for user, pid in servers.items():
         env = environ_of(pid)
-        assert env["TUTOR_SESSION_DIR"] == str(hub.class_dir / user), env["TUTOR_SESSION_DIR"]
+        assert env["TUTOR_RUNS_DIR"] == str(hub.class_dir / user), env["TUTOR_RUNS_DIR"]
         assert (hub.class_dir / user).is_dir()
         assert env["TUTOR_CLASS_PLAN"] == str(hub.class_dir / "plan.csv")
         assert env["JUPYTERHUB_SERVICE_PREFIX"] == f"/user/{user}/"

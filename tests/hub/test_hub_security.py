@@ -388,7 +388,7 @@ def test_each_trainee_pod_mounts_only_its_own_folder_of_the_class_volume():
     assert mounts, "no mount of the class volume"
     for mount in mounts:
         assert "{username}" in mount.get("subPath", ""), f"a trainee mounts the root: {mount}"
-    assert values["extraEnv"]["TUTOR_SESSION_DIR"] == mounts[0]["mountPath"]
+    assert values["extraEnv"]["TUTOR_RUNS_DIR"] == mounts[0]["mountPath"]
     trainee = [p for p in values["profileList"] if p["slug"] == "trainee"]
     assert trainee and trainee[0].get("default") is True
     assert "kubespawner_override" not in trainee[0]

@@ -5,7 +5,7 @@
 - :mod:`.failures`: incorrect, ambiguous and undemonstrated failures.
 - :mod:`.feedback`: the feedback policies (what r is, what totals may be shown).
 - :mod:`.selectors`: adaptive test sets, the k conditions shown after a demo (AF).
-- :mod:`.session`: :class:`TeachingSession`, demos in, feedback records out.
+- :mod:`.session`: :class:`TeachingSession`, demos in, demo steps out.
 - :mod:`.record`: :class:`RunRecord`, the typed, versioned record of one run (its
   attempts, demos and events), the one file format of a teaching run.
 - :mod:`.run`: :class:`TeachingRun`, a record kept in step with its session.
@@ -17,7 +17,7 @@ from .metrics import SessionScore, efficacy, efficiency, session_score
 from .record import Attempt, Demo, Event, RunRecord, Test, Trainee
 from .run import RunOverError, TeachingRun
 from .selectors import SELECTORS, SelectionContext, Selector, select
-from .session import FEEDBACK_MODES, FeedbackRecord, TeachingSession
+from .session import FEEDBACK_MODES, DemoStep, TeachingSession
 from .task import Task, Verdict
 
 __all__ = [
@@ -40,7 +40,7 @@ __all__ = [
     "select",
     "Visibility",
     "reveal",
-    "FeedbackRecord",
+    "DemoStep",
     "SessionScore",
     "Task",
     "TeachingSession",

@@ -80,7 +80,7 @@ _IN_USE = (
 )
 
 
-def _check_path(path, what: str = "session_file") -> str:
+def _check_path(path, what: str = "run_file") -> str:
     """``path`` as text, or InvalidParameterError saying what is wrong with it."""
     problem = check_file_name(path)
     if problem is not None:
@@ -99,7 +99,7 @@ class RunController:
     run_class : type of TeachingRun
     condition : str
     task : Task
-    session_file : path or None
+    run_file : path or None
         Where the run autosaves; an existing file of the same run is resumed.
     trainee : str or Trainee, optional
         The trainee (default ``JUPYTERHUB_USER`` on a hub, else "trainee").
@@ -127,7 +127,7 @@ class RunController:
         run_class: type[TeachingRun],
         condition: str,
         task,
-        session_file=None,
+        run_file=None,
         trainee=None,
         run: int = 1,
         practice: bool = False,
@@ -154,7 +154,7 @@ class RunController:
         #: what a refused action says while the view is read-only
         self._refusal = ""
         self._reset_asked = -1e9
-        self.session_file = None if session_file is None else Path(_check_path(session_file))
+        self.run_file = None if run_file is None else Path(_check_path(run_file))
         self.run = self._open()
 
     # ------------------------------------------------------------ the message
@@ -228,23 +228,23 @@ class RunController:
     # ------------------------------------------------------------ opening the file
 
     def _open(self) -> TeachingRun:
-        if self.session_file is None:
+        if self.run_file is None:
             return self._fresh()
         notes = []
-        path = self.session_file
+        path = self.run_file
         for k in range(1, _MAX_SIBLINGS + 1):
             candidate = path if k == 1 else path.with_name(f"{path.stem}-{k}{path.suffix}")
             found, why = self._try_resume(candidate)
             if why is None:
                 if candidate != path:
                     notes.append(f"This run is kept in {candidate.name} instead.")
-                    self.session_file = candidate
+                    self.run_file = candidate
                 if notes:
                     self.say(" ".join([*notes, self.message]).strip())
                 return found if found is not None else self._fresh()
             notes.append(why)
         self.say(" ".join(notes) + " No free file name was found: this run is not saved.")
-        self.session_file = None
+        self.run_file = None
         return self._fresh()
 
     def _try_resume(self, path: Path):
@@ -312,9 +312,9 @@ class RunController:
 
     def try_again(self) -> None:
         """A read-only view tries once more to take its run's file (and reloads it)."""
-        if not self.read_only or self.session_file is None:
+        if not self.read_only or self.run_file is None:
             return
-        path = self.session_file
+        path = self.run_file
         if not self._take_lock(path):
             if self.lock_problem is not None:
                 self.say(
@@ -399,7 +399,7 @@ class RunController:
         is read-only afterwards."""
         self.autosave()
         self.release_lock()
-        if self.session_file is not None and not self.read_only:
+        if self.run_file is not None and not self.read_only:
             self._go_read_only(
                 "",
                 "This tutor was closed, so it is read-only: nothing was changed. Run its "
@@ -423,10 +423,10 @@ class RunController:
 
     def autosave(self) -> None:
         """Save the run to its file after a change; a failure is said, never raised."""
-        if self.session_file is None or self.read_only or self._lock is None:
+        if self.run_file is None or self.read_only or self._lock is None:
             return
         try:
-            self.run.save(self.session_file)
+            self.run.save(self.run_file)
         except SaveError as exc:
             self.unsaved = True
             why = (
@@ -467,21 +467,21 @@ class RunController:
                     'folder / "VF-copy.json".'
                 )
             target = Path(path)
-            own = self.session_file is not None and (
-                os.path.realpath(target) == os.path.realpath(self.session_file)
+            own = self.run_file is not None and (
+                os.path.realpath(target) == os.path.realpath(self.run_file)
             )
             if not own:
                 refuse_others_file(target, self.record)
                 self.run.save(target)
                 self.say(f"Saved a copy to {target}.")
                 return target
-        if self.session_file is None:
+        if self.run_file is None:
             self.say("This run has no file to save to (see above).")
             return None
-        self.run.save(self.session_file)
+        self.run.save(self.run_file)
         self.unsaved = False
-        self.say(f"Saved to {self.session_file}.")
-        return self.session_file
+        self.say(f"Saved to {self.run_file}.")
+        return self.run_file
 
     # ------------------------------------------------------------ actions
 

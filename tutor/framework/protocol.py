@@ -48,6 +48,7 @@ from ..paper import (
     PICKPLACE_N_TEACHERS,
 )
 from .feedback import FEEDBACK_POLICIES, FeedbackPolicy
+from .wording import listing
 
 __all__ = ["Condition", "Experiment", "EXPERIMENTS", "experiment", "register", "run_file_name"]
 
@@ -184,6 +185,19 @@ class Experiment:
     def selectors(self) -> dict[str, tuple[str, int]]:
         """The adaptive conditions: code -> (selector name, k)."""
         return {c.code: c.selector for c in self.conditions if c.selector is not None}
+
+    @property
+    def design(self) -> str:
+        """Who teaches what, in words ("every trainee teaches NF, VF and VR")."""
+        if self.within_subjects:
+            return f"every trainee teaches {listing(self.paper_codes)}"
+        runs = ("two", "three", "four", "five")[self.runs - 2] if 2 <= self.runs <= 5 else self.runs
+        return f"each trainee teaches {runs} runs of one condition"
+
+    @property
+    def unit(self) -> str:
+        """What a trainee finishes: a "condition" (within subjects) or a "run"."""
+        return "condition" if self.within_subjects else "run"
 
     def condition(self, code) -> Condition:
         """The condition called ``code``, or a named error listing this experiment's."""

@@ -43,6 +43,7 @@ from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 
 from ..errors import InvalidFileError
+from .protocol import EXPERIMENTS
 from .record_checks import (
     _bool,
     _check_history,
@@ -172,7 +173,8 @@ class RunRecord:
     @property
     def label(self) -> str:
         """E.g. "experiment 1, VF run" or "experiment 2, BF run 2", for messages."""
-        number = f" {self.run}" if self.experiment == 2 else ""
+        spec = EXPERIMENTS.get(self.experiment)
+        number = f" {self.run}" if spec is not None and spec.runs > 1 else ""
         practice = " (practice)" if self.practice else ""
         return f"experiment {self.experiment}, {self.condition} run{number}{practice}"
 

@@ -52,7 +52,7 @@ from .record import (
     round_recording,
     utc_now,
 )
-from .session import FeedbackRecord, TeachingSession
+from .session import DemoStep, TeachingSession
 from .task import Task
 
 __all__ = ["TeachingRun", "RunOverError"]
@@ -232,6 +232,11 @@ class TeachingRun:
         the cohort tables alike. ``target`` is Experiment 1's coverage (the paper's 90 %)."""
         return self.session.score(rule=self.score_rule, target=target)
 
+    def study_columns(self) -> dict:
+        """The run's own columns in a study's table of runs (none here; a task's run adds
+        what its experiment measures)."""
+        return {}
+
     def visibility(self, extra_shown=()):
         """What the trainee may see now (:func:`tutor.framework.feedback.reveal`)."""
         rec = self.session.latest
@@ -344,7 +349,7 @@ class TeachingRun:
         mistake: str = "",
         given: str = "",
         recording=None,
-    ) -> FeedbackRecord:
+    ) -> DemoStep:
         """Add one demonstration; returns the feedback after it.
 
         ``condition`` is the test condition it was meant for (read off the demo when
@@ -420,7 +425,7 @@ class TeachingRun:
         self._record = self._record.with_current(self.attempt, self._event("load", detail=detail))
         return len(items)
 
-    def undo(self, spent_seconds: float = 0.0) -> FeedbackRecord | None:
+    def undo(self, spent_seconds: float = 0.0) -> DemoStep | None:
         """Take back the latest demo (kept in ``Attempt.undone``); returns the new latest.
 
         ``spent_seconds`` is clock time the demo used that stays spent (Experiment 2).

@@ -1,4 +1,4 @@
-r"""A teaching session: demos in, feedback records out (Sena & Howard, sections
+r"""A teaching session: demos in, demo steps out (Sena & Howard, sections
 "Learning and Teaching Framework" and "Evaluating Teaching").
 
 After each demo the session refits the learner :math:`\lambda` (warm start),
@@ -49,13 +49,13 @@ from .metrics import SessionScore, efficacy, efficiency, run_score
 from .selectors import DEFAULT_K, DEFAULT_SELECTOR, SelectionContext, check_k, check_selector
 from .task import Reason, Task
 
-__all__ = ["FeedbackRecord", "TeachingSession", "FEEDBACK_MODES"]
+__all__ = ["DemoStep", "TeachingSession", "FEEDBACK_MODES"]
 
 FEEDBACK_MODES = tuple(FEEDBACK_POLICIES)
 
 
 @dataclass(frozen=True)
-class FeedbackRecord:
+class DemoStep:
     """What the tutor knows after demo number ``n_demos``.
 
     Arrays are over the test conditions B^ (length n) unless said otherwise.
@@ -171,7 +171,7 @@ class TeachingSession:
         self._fresh_learner = learner if learner is not None else task.make_learner()
         self._demos: list[np.ndarray] = []
         self._conditions: list[np.ndarray] = []
-        self._history: list[FeedbackRecord] = []
+        self._history: list[DemoStep] = []
         self._learners: list = []
         self._realisations: list[np.ndarray] = []
 
@@ -198,12 +198,12 @@ class TeachingSession:
         return self._demos[-1].copy() if self._demos else None
 
     @property
-    def history(self) -> list[FeedbackRecord]:
+    def history(self) -> list[DemoStep]:
         """One record per demo, oldest first."""
         return list(self._history)
 
     @property
-    def latest(self) -> FeedbackRecord | None:
+    def latest(self) -> DemoStep | None:
         return self._history[-1] if self._history else None
 
     @property
@@ -238,7 +238,7 @@ class TeachingSession:
 
     # ---------------------------------------------------------------- teaching
 
-    def add_demo(self, raw, shown=None, condition=None) -> FeedbackRecord:
+    def add_demo(self, raw, shown=None, condition=None) -> DemoStep:
         """Add one demonstration and return the feedback after it.
 
         Parameters
@@ -275,7 +275,7 @@ class TeachingSession:
         self._history.append(record)
         return record
 
-    def undo(self) -> FeedbackRecord | None:
+    def undo(self) -> DemoStep | None:
         """Remove the latest demo; returns the record now current (None if no demo is left)."""
         if not self._demos:
             raise InvalidParameterError("there is no demo to undo")
@@ -283,7 +283,7 @@ class TeachingSession:
             stack.pop()
         return self.latest
 
-    def remove_demo(self, number: int) -> FeedbackRecord | None:
+    def remove_demo(self, number: int) -> DemoStep | None:
         """Remove demo ``number`` (1-based) and replay the later ones; returns the new latest.
 
         Records after the removed demo are recomputed as if it had never been given.
@@ -384,7 +384,7 @@ class TeachingSession:
         )
         if missing is not None:
             warnings.append(missing)
-        record = FeedbackRecord(
+        record = DemoStep(
             n_demos=m,
             efficacy=eps,
             efficiency=efficiency(eps, m),

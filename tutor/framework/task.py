@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InvalidParameterError
 from ..tpgmm import TPGMM, Frame, FrameBatch
 from .wording import REASON_WORDS, listing
 
@@ -43,8 +44,8 @@ class Reason:
         How many samples the judged path has (with ``sample``).
     distance : float or None
         How far off (task units): the end from the target, the grasp from the plant.
-    obstacle : str
-        The name of the obstacle hit ("obstacle 2 (right-hand)"), else "".
+    obstacle : int or None
+        0-based index of the obstacle hit (the task names it: :meth:`Task.obstacle_name`).
     plant, chosen : int or None
         Test-condition indices: the one grabbed and the one meant ("wrong_plant").
     """
@@ -53,7 +54,7 @@ class Reason:
     sample: int | None = None
     samples: int | None = None
     distance: float | None = None
-    obstacle: str = ""
+    obstacle: int | None = None
     plant: int | None = None
     chosen: int | None = None
 
@@ -80,7 +81,7 @@ class Verdict:
 class Task(ABC):
     """A task the teacher demonstrates and the learner must generalise."""
 
-    #: short identifier stored in session files
+    #: short identifier stored in run files
     name: str = "task"
     #: distance (in the task's units) below which a demo counts as similar (delta_a)
     ambiguity_distance: float = 0.0
@@ -101,6 +102,18 @@ class Task(ABC):
         """Test condition ``index`` (0-based) in words ("start point 3")."""
         return f"{self.condition_noun} {int(index) + 1}"
 
+    def scripted_demo(self, index: int, rng) -> np.ndarray:
+        """A careful scripted recording for test condition ``index`` (raw, as a hand gives
+        it), for banks of demos the lookahead chooses from."""
+        raise InvalidParameterError(
+            f"the task {self.name!r} has no scripted demonstrations: give it a "
+            "scripted_demo(index, rng) method"
+        )
+
+    def obstacle_name(self, index: int) -> str:
+        """Obstacle ``index`` (0-based) in words ("obstacle 2")."""
+        return f"obstacle {int(index) + 1}"
+
     def reason_words(self, causes, samples: bool = True) -> str:
         """``causes`` (a tuple of :class:`Reason`) in plain words, "" for none; with
         ``samples`` False, without "at sample k of n"."""
@@ -113,7 +126,7 @@ class Task(ABC):
                 REASON_WORDS[r.kind].format(
                     at=at,
                     distance="" if r.distance is None else self.format_distance(r.distance),
-                    obstacle=r.obstacle,
+                    obstacle="" if r.obstacle is None else self.obstacle_name(r.obstacle),
                     plant="" if r.plant is None else self.condition_name(r.plant),
                     chosen="" if r.chosen is None else self.condition_name(r.chosen),
                 )
@@ -193,5 +206,5 @@ class Task(ABC):
         """A fresh learner (lambda) for this task, with warm starts enabled."""
 
     def to_spec(self) -> dict:
-        """What a session file records about the task, to rebuild it on loading."""
+        """What a run file records about the task, to rebuild it on loading."""
         return {"name": self.name}

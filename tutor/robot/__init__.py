@@ -49,7 +49,7 @@ from .feasibility import (
     FullCheck,
     MapCheck,
     default_map,
-    first_failure,
+    first_bad_sample,
 )
 from .model import (
     DOWN,
@@ -72,7 +72,7 @@ __all__ = [
     "FeasibilityMap",
     "FullCheck",
     "MapCheck",
-    "first_failure",
+    "first_bad_sample",
     "check_paths",
     "default_map",
     "open_box",

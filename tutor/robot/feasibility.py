@@ -22,7 +22,7 @@ from .model import DOWN, REACH_TOL, TILT_TOL
 from .obstacles import check_boxes
 
 __all__ = [
-    "first_failure",
+    "first_bad_sample",
     "FeasibilityMap",
     "FullCheck",
     "MapCheck",
@@ -38,7 +38,7 @@ MAP_VERSION = 1
 
 
 
-def first_failure(bad) -> np.ndarray:
+def first_bad_sample(bad) -> np.ndarray:
     """Index of the first True along the last axis of ``bad`` (..., T); T when none."""
     bad = np.asarray(bad, dtype=bool)
     return np.where(bad.any(axis=-1), np.argmax(bad, axis=-1), bad.shape[-1])
@@ -228,7 +228,7 @@ class FeasibilityMap(_PathCriterion):
 
     def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
         P, G = check_paths(paths, gripper)
-        return first_failure(~self.contains(P, G) | _known_bad(known_bad, P.shape[:-1]))
+        return first_bad_sample(~self.contains(P, G) | _known_bad(known_bad, P.shape[:-1]))
 
     first_outside.__doc__ = _FIRST_DOC.format(how="a lookup.")
 
@@ -397,7 +397,7 @@ class FullCheck(_PathCriterion):
         P, G = check_paths(paths, gripper)
         shape = P.shape[:-2]
         T = P.shape[-2]
-        limit = first_failure(_known_bad(known_bad, P.shape[:-1])).reshape(-1)
+        limit = first_bad_sample(_known_bad(known_bad, P.shape[:-1])).reshape(-1)
         paths, G = P.reshape(-1, T, 3), G.reshape(-1, T)
         rows = zip(paths, G, limit, strict=True)
         out = np.array([self.first_problem(p, g, n) for p, g, n in rows])
@@ -467,7 +467,7 @@ class MapCheck(_PathCriterion):
         out = value > 0
         # a path is judged by its first sample outside X: follow it in full only when
         # an unknown sample comes before any the map already rejects
-        redo = first_failure(unknown) < first_failure(~out & ~unknown)  # (...)
+        redo = first_bad_sample(unknown) < first_bad_sample(~out & ~unknown)  # (...)
         if redo.any():
             idx = np.nonzero(redo)
             out[idx] = self.full.contains(P[idx], G[idx])
@@ -484,11 +484,11 @@ class MapCheck(_PathCriterion):
         P, G = check_paths(paths, gripper)
         known = _known_bad(known_bad, P.shape[:-1])
         value, unknown = self._lookup(P, G)
-        first_known = first_failure(known)
-        first = np.minimum(first_failure((value <= 0) & ~unknown), first_known)
+        first_known = first_bad_sample(known)
+        first = np.minimum(first_bad_sample((value <= 0) & ~unknown), first_known)
         # an off-grid sample the arm may reach comes first: follow the path in full,
         # from the start up to its first known-bad sample
-        redo = first_failure(unknown) < first
+        redo = first_bad_sample(unknown) < first
         for i in np.argwhere(redo):
             i = tuple(i)
             first[i] = self.full.first_problem(P[i], G[i], int(first_known[i]))

@@ -32,7 +32,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .. import paper
 from ..errors import SaveError
 from ..framework.protocol import EXPERIMENTS
 from ..framework.wording import NOT_A_NUMBER, plural, sentence
@@ -97,11 +96,7 @@ def too_small(runs: pd.DataFrame, experiment: int) -> str:
     if not short:
         return ""
     have = ", ".join(f"{c} {k}" for c, k in counts.items())
-    design = (
-        "every trainee teaches NF, VF and VR"
-        if experiment == 1
-        else "each trainee teaches three runs of one condition"
-    )
+    design = EXPERIMENTS[experiment].design
     return (
         f"the class is too small for the paper's tests: they need at least "
         f"{MIN_PER_CONDITION} trainees per condition who finished every run ({design}), "
@@ -131,10 +126,8 @@ def descriptive_table(runs: pd.DataFrame, experiment: int) -> pd.DataFrame:
             "ambiguous": g["ambiguous"].sum(),
         }
     )
-    if experiment == 1:
-        table["reached 90 %"] = g["reached_target"].sum()
-    else:
-        table["mean minutes"] = g["seconds"].mean() / 60
+    name, column = stats.ANALYSES[experiment].class_column(g)
+    table[name] = column
     return table.reindex(conditions)
 
 
@@ -147,7 +140,7 @@ def same_size_cohort(class_runs: pd.DataFrame, experiment: int, seed: int = 0) -
     bundled = load_result(experiment).runs
     rng = np.random.default_rng(seed)
     counts = _counts(class_runs, experiment)
-    if experiment == 1:
+    if EXPERIMENTS[experiment].within_subjects:
         pool = np.sort(bundled.teacher.unique())
         k = min(max(counts.values(), default=0), len(pool))
         chosen = rng.choice(pool, size=k, replace=False)
@@ -168,14 +161,14 @@ def beyond_table(runs: pd.DataFrame, experiment: int) -> pd.DataFrame:
     Empty (no rows) when ``runs`` holds none of them.
     """
     spec = EXPERIMENTS[experiment]
-    measure = "median eta" if experiment == 1 else "mean eta"
+    pick = stats.ANALYSES[experiment].summary
+    measure = f"{pick} eta"
     columns = ["compared with", "trainees", measure, "trainees (compared)",
                f"{measure} (compared)", "test", "T", "p"]
     rows = {}
     for code in _taught(runs, experiment)[len(spec.paper_codes):]:
         other = spec.condition(code).compared_with
         mine, theirs = (runs[runs.condition.astype(str) == c] for c in (code, other))
-        pick = "median" if experiment == 1 else "mean"
         test = stats.compare_two(runs, code, other, experiment)
         rows[code] = [
             other, mine.teacher.nunique(), getattr(mine.eta, pick)(), theirs.teacher.nunique(),
@@ -196,7 +189,7 @@ def _tests(runs: pd.DataFrame, experiment: int) -> dict:
         )
     if why:
         return {"tested": False, "why_not": why}
-    st = stats.experiment1_stats(runs) if experiment == 1 else stats.experiment2_stats(runs)
+    st = stats.ANALYSES[experiment].tests(runs)
     return {
         "tested": True,
         "why_not": "",
@@ -232,8 +225,8 @@ def analyse_class(result: ClassResult, seed: int = 0) -> dict:
         "beyond": beyond_table(result.complete_runs, exp),
     }
     conditions = list(EXPERIMENTS[exp].paper_codes)
-    measure = "median eta" if exp == 1 else "mean eta"
-    ref = paper.EXPERIMENT_1["median_eta"] if exp == 1 else paper.EXPERIMENT_2["mean_eta"]
+    how = stats.ANALYSES[exp]
+    measure, ref = f"{how.summary} eta", how.paper_eta
     sim = descriptive_table(simulated_runs, exp)
     out["beside"] = pd.DataFrame(
         {
@@ -291,11 +284,12 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
     trainees = result.trainees
     counted = int((trainees.counted_runs > 0).sum()) if len(trainees) else 0
     whole = int(trainees.complete.sum()) if len(trainees) else 0
-    task = "maze" if exp == 1 else "pick-and-place"
+    spec = EXPERIMENTS[exp]
+    task = spec.title
     lines = [
         f"Experiment {exp} ({task}) of the class in {result.source}",
         f"{plural(len(result.runs), 'run')} counted from {plural(counted, 'trainee')}; "
-        f"{plural(whole, 'trainee')} finished every {'condition' if exp == 1 else 'run'}.",
+        f"{plural(whole, 'trainee')} finished every {spec.unit}.",
         "",
     ]
     if result.runs.empty:
@@ -318,9 +312,9 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
         lines += _test_lines(analysis["class"], exp, "This class")
         lines += _test_lines(analysis["simulated"], exp, "Simulated, same size")
         lines += beyond_lines(analysis["beyond"])
-        if exp == 2 and analysis["failures"] is not None:
+        if stats.ANALYSES[exp].failures and analysis["failures"] is not None:
             fail = analysis["failures"]
-            ref = pd.DataFrame(paper.EXPERIMENT_2["failures"]).T[fail.columns]
+            ref = pd.DataFrame(stats.ANALYSES[exp].paper["failures"]).T[fail.columns]
             lines.append("")
             lines.append("Failures over all counted runs: class (paper)")
             lines.append((fail.astype(str) + " (" + ref.astype(str) + ")").to_string())
@@ -341,7 +335,7 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
     lines += [as_sentence(note) for note in result.notes]
     others = result.other_experiment
     if others:
-        other = 2 if exp == 1 else 1
+        other = next(n for n in EXPERIMENTS if n != exp)
         lines.append(
             f"{len(others)} files of Experiment {other} were set aside: read them with "
             f"--experiment {other}."
@@ -393,9 +387,9 @@ def _class_json(result: ClassResult, analysis: dict) -> dict:
 def class_figure(result: ClassResult, analysis: dict):
     """The paper-style figure of the class (the paper's conditions), the simulated
     same-size medians/means marked."""
-    from .figures import experiment1_figure, experiment2_figure
+    from .figures import FIGURES
 
-    draw = experiment1_figure if result.experiment == 1 else experiment2_figure
+    draw = FIGURES[result.experiment]
     runs = paper_runs(result.runs, result.experiment)  # beside the paper's: its conditions
     return draw(runs, who="trainees", reference=analysis["simulated"]["runs"])
 

@@ -179,7 +179,8 @@ class ClassResult:
             theirs = [f for f in mine if f.trainee_key == key]
             counted = [f for f in theirs if f.counted]
             names = Counter(f.trainee for f in theirs) or Counter([self.roster[key][0]])
-            assigned = self.roster.get(key, ("", ""))[1] if self.experiment == 2 else ""
+            within = EXPERIMENTS[self.experiment].within_subjects
+            assigned = "" if within else self.roster.get(key, ("", ""))[1]
             taught = {f.condition for f in counted}
             if not theirs:
                 missing = "no run file yet"
@@ -187,7 +188,7 @@ class ClassResult:
                 missing = (
                     f"taught {', '.join(sorted(taught))}, but the class plan assigns {assigned}"
                 )
-            elif self.experiment == 1:
+            elif within:
                 done = {f.condition for f in counted}
                 lacking = [c for c in conditions if c not in done]
                 missing = ("still to do: " + ", ".join(lacking)) if lacking else ""

@@ -53,6 +53,7 @@ from ..framework.assignment import ClassPlan, load_plan
 from ..framework.protocol import EXPERIMENTS
 from ..framework.record import RunRecord
 from ..framework.wording import sentence
+from ..tasks import run_class
 from .class_copies import _apart, _duplicates
 from .class_files import ZIP_AGAIN, close_zips, hidden, list_class, read_run_file
 from .class_result import PROBLEMS, ClassResult, FileOutcome
@@ -69,13 +70,7 @@ __all__ = [
 
 
 def _run_class(experiment: int):
-    if experiment == 1:
-        from ..tasks.maze_run import MazeRun
-
-        return MazeRun
-    from ..tasks.pickplace_protocol import PickPlaceRun
-
-    return PickPlaceRun
+    return run_class(EXPERIMENTS[experiment].task)
 
 
 #: experiment -> a function giving its TeachingRun subclass (imported on first use)

@@ -38,6 +38,8 @@ from ..errors import InvalidParameterError
 from ..framework.failures import Thresholds, is_ambiguous
 from ..framework.protocol import EXPERIMENTS
 from ..framework.protocol import experiment as experiment_of
+from ..tasks import make_task
+from ..teachers import TEACHERS
 from ..teachers.traits import DEFAULT_POPULATION, Population
 from ..workers import one_blas_thread, process_pool
 from .limits import MAX_SEED, MAX_TEACHERS
@@ -95,7 +97,7 @@ def min_teachers(experiment: int, conditions=None) -> int:
     (between subjects) needs 2 teachers per condition for a variance within each group.
     """
     k = len(check_conditions(experiment, conditions))
-    return k if experiment == 1 else 2 * k
+    return k if EXPERIMENTS[experiment].within_subjects else 2 * k
 
 
 @dataclass(frozen=True)
@@ -122,6 +124,16 @@ class StudySettings:
     target: float = 0.9
     pickplace_ambiguity: float = 0.03
     pickplace_feasibility: bool = True
+
+    def ambiguity(self, name: str) -> float | None:
+        """delta_a for task ``name``'s runs: pick-and-place's setting, else None (the
+        task's own)."""
+        return {"pickplace": self.pickplace_ambiguity}.get(name)
+
+    def task_options(self, name: str) -> dict:
+        """The options a cohort builds task ``name`` with (:func:`tutor.tasks.make_task`)."""
+        feasibility = "map" if self.pickplace_feasibility else None
+        return {"pickplace": {"feasibility": feasibility}}.get(name, {})
 
 
 @dataclass
@@ -169,15 +181,17 @@ def check_request(experiment, n=None, seed=0, conditions=None) -> tuple[int, int
             f"Experiment {experiment} can simulate at most {MAX_TEACHERS} teachers (100 times "
             f"the paper's cohort), got n = {n}; give a smaller n (the paper used {spec.n_teachers})"
         )
-    if experiment == 1 and n < smallest:
+    if spec.within_subjects and n < smallest:
         raise InvalidParameterError(
-            f"Experiment 1 needs at least {smallest} teachers for its statistics (the "
-            f"sphericity test of its {k} conditions), got n = {n}; the paper used 30"
+            f"Experiment {experiment} needs at least {smallest} teachers for its statistics "
+            f"(the sphericity test of its {k} conditions), got n = {n}; the paper used "
+            f"{spec.n_teachers}"
         )
-    if experiment == 2 and (n < smallest or n % k):
+    if not spec.within_subjects and (n < smallest or n % k):
         raise InvalidParameterError(
-            f"Experiment 2 needs a multiple of {k} teachers, at least {smallest} (2 per "
-            f"condition), got n = {n}; the paper used 36 for its 4"
+            f"Experiment {experiment} needs a multiple of {k} teachers, at least {smallest} (2 "
+            f"per condition), got n = {n}; the paper used {spec.n_teachers} for its "
+            f"{len(spec.paper_codes)}"
         )
     if (
         not isinstance(seed, int | np.integer)
@@ -202,16 +216,7 @@ _TASKS: dict = {}
 def _task(name: str, settings: StudySettings):
     key = (name, settings.pickplace_feasibility)
     if key not in _TASKS:
-        if name == "maze":
-            from ..tasks.maze import MazeTask
-
-            _TASKS[key] = MazeTask()
-        else:
-            from ..tasks.pickplace import PickPlaceTask
-
-            _TASKS[key] = PickPlaceTask(
-                feasibility="map" if settings.pickplace_feasibility else None
-            )
+        _TASKS[key] = make_task(name, **settings.task_options(name))
     return _TASKS[key]
 
 
@@ -284,34 +289,25 @@ def teach_runs(
     """
     chosen = check_conditions(experiment, conditions)
     traits = population.sample(_rng(seed, experiment, teacher, 0))
-    if experiment == 1:
-        from ..teachers.maze import MazeTeacher
-
-        model = MazeTeacher(traits, _task("maze", settings))
+    spec = EXPERIMENTS[experiment]
+    model = TEACHERS[spec.task](traits, _task(spec.task, settings))
+    if spec.within_subjects:
         for k, cond in enumerate(chosen, start=1):
             yield traits, 1, model.teach(cond, _rng(seed, experiment, teacher, k))
     else:
-        from ..teachers.pickplace import PickPlaceTeacher
-
         per = n // len(chosen)
         cond = chosen[teacher // per]
-        model = PickPlaceTeacher(traits, _task("pickplace", settings))
-        for k in range(1, EXPERIMENTS[experiment].runs + 1):
+        for k in range(1, spec.runs + 1):
             yield traits, k, model.teach(cond, _rng(seed, experiment, teacher, k))
 
 
 def rows_of(run, base: dict, settings: StudySettings = StudySettings()):
-    """:func:`run_rows` of a run with the study's settings, plus VR's rule compliance
-    (Experiment 1) or the clock seconds (Experiment 2)."""
-    if run.experiment == 1:
-        row, demo_rows = run_rows(run, base, None, settings.target)
-        compliance = run.compliance
-        row["followed_rules"] = (
-            float(np.mean(compliance)) if run.protocol_condition.rules and compliance else np.nan
-        )
-    else:
-        row, demo_rows = run_rows(run, base, settings.pickplace_ambiguity, settings.target)
-        row["seconds"] = run.elapsed
+    """:func:`run_rows` of a run with the study's settings, plus the run's own columns
+    (``study_columns``: VR's rule compliance in the maze, the clock's seconds in
+    pick-and-place)."""
+    ambiguity = settings.ambiguity(run.task.name)
+    row, demo_rows = run_rows(run, base, ambiguity, settings.target)
+    row.update(run.study_columns())
     return row, demo_rows
 
 

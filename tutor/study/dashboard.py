@@ -17,8 +17,8 @@ shows, beside the paper's numbers and a simulated class of the same size
 writes what ``lfd-tutor class --out`` writes, to a folder beside the class folder.
 
 The class folder is, in order: the ``folder`` argument, ``TUTOR_CLASS_DIR`` in the
-environment (the hub kit sets it for the educator), or the tutor's own sessions folder
-(:func:`tutor.runtime.sessions_root`, where trainees' runs go on one machine). With
+environment (the hub kit sets it for the educator), or the tutor's own runs folder
+(:func:`tutor.runtime.runs_root`, where trainees' runs go on one machine). With
 ``TUTOR_HEADLESS=1`` and no folder given, the dashboard shows a simulated class
 (:func:`.simulated_class.write_simulated_class`), as a rehearsal would.
 
@@ -44,9 +44,10 @@ import ipywidgets as w
 
 from ..errors import InvalidParameterError, TutorError
 from ..fileio import check_path_length
+from ..framework.protocol import EXPERIMENTS
 from ..framework.wording import percent, plural
 from ..payloads import check_choice, check_text, safely
-from ..runtime import headless, sessions_root
+from ..runtime import headless, runs_root
 from .class_report import (
     BESIDE_LEGEND,
     analyse_class,
@@ -69,9 +70,9 @@ REFRESH_RANGE = (10, 600)
 
 
 def default_class_folder() -> Path:
-    """``TUTOR_CLASS_DIR``, or else the tutor's sessions folder."""
+    """``TUTOR_CLASS_DIR``, or else the tutor's runs folder."""
     value = os.environ.get(CLASS_DIR_ENV, "").strip()
-    return check_path_length(value, CLASS_DIR_ENV) if value else sessions_root()
+    return check_path_length(value, CLASS_DIR_ENV) if value else runs_root()
 
 
 #: how every text block of the dashboard wraps: between words only (JupyterLab gives a
@@ -467,7 +468,8 @@ class ClassDashboard:
         from .simulated_class import write_simulated_class
 
         folder = Path(tempfile.mkdtemp(prefix="lfd-simulated-class-")) / "class"
-        n = n if self.experiment.value == 1 else 36  # Experiment 2: 4 conditions of 9
+        spec = EXPERIMENTS[self.experiment.value]
+        n = n if spec.within_subjects else spec.n_teachers  # Experiment 2: 4 conditions of 9
         self._say(f"Writing a simulated class ({plural(n, 'trainee')})…")
         write_simulated_class(folder, self.experiment.value, n, seed=1, unfinished=2, damaged=3)
         self._rehearsing = True  # one read, not one for the new folder and one here
@@ -483,7 +485,7 @@ def class_dashboard(folder=None, experiment: int = 1, refresh_seconds: int | Non
     """Build and show the dashboard (notebook 05); returns the :class:`ClassDashboard`.
 
     With ``TUTOR_HEADLESS=1`` and no ``folder`` (and no ``TUTOR_CLASS_DIR``), it shows a
-    simulated class instead of an empty sessions folder.
+    simulated class instead of an empty runs folder.
     """
     from IPython.display import display
 

@@ -27,6 +27,7 @@ from ..framework.wording import percent
 __all__ = [
     "experiment1_figure",
     "experiment2_figure",
+    "FIGURES",
     "eta_caption",
     "wrap_label",
     "CONDITION_COLOURS",
@@ -306,3 +307,7 @@ def experiment2_figure(
     ax.set_title(f"Failures by condition (bars: {who}, black: paper)")
     _legend_below(ax, len(conds), drop=0.16)  # two-line tick labels
     return fig
+
+
+#: experiment number -> its figure of eta per condition
+FIGURES = {1: experiment1_figure, 2: experiment2_figure}

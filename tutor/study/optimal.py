@@ -53,7 +53,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, TutorError
 from ..framework.metrics import run_score
-from ..tasks import lookahead
+from ..tasks import lookahead, make_task
 from ..tasks.lookahead import (
     EPS_TOL,
     Bank,
@@ -102,6 +102,20 @@ RULES = {1: "target", 2: "final"}
 # ---------------------------------------------------------------- the bank
 
 
+def _steady_stroke(task, index: int, rng) -> np.ndarray:
+    from ..teachers.maze import MazeTeacher
+    from ..teachers.traits import DEFAULT_POPULATION
+
+    traits = DEFAULT_POPULATION.sample(np.random.default_rng(0))
+    steady = dataclasses.replace(traits, motor_noise=DEFAULT_POPULATION.motor_low)
+    return MazeTeacher(steady, task).stroke(task.conditions[index], rng)
+
+
+#: task name -> the careful hand of its optimal teacher, where it is not the task's own
+#: scripted demo (:meth:`~tutor.framework.task.Task.scripted_demo`)
+CAREFUL_HANDS = {"maze": _steady_stroke}
+
+
 def careful_recording(task, index: int, rng) -> np.ndarray:
     """A careful teacher's raw recording for condition ``index`` of ``task``.
 
@@ -110,18 +124,8 @@ def careful_recording(task, index: int, rng) -> np.ndarray:
     task's kinesthetic hand (:meth:`~tutor.tasks.pickplace.PickPlaceTask.demonstrate`)
     with no mistake.
     """
-    if task.name == "maze":
-        from ..teachers.maze import MazeTeacher
-        from ..teachers.traits import DEFAULT_POPULATION
-
-        traits = DEFAULT_POPULATION.sample(np.random.default_rng(0))
-        steady = dataclasses.replace(traits, motor_noise=DEFAULT_POPULATION.motor_low)
-        return MazeTeacher(steady, task).stroke(task.conditions[index], rng)
-    if task.name == "pickplace":
-        return task.demonstrate(int(index), rng)
-    raise InvalidParameterError(
-        f"the optimal teacher knows the tasks 'maze' and 'pickplace', got {task.name!r}"
-    )
+    hand = CAREFUL_HANDS.get(task.name)
+    return task.scripted_demo(index, rng) if hand is None else hand(task, index, rng)
 
 
 def make_bank(task, draws: int = 3, seed: int = 0, indices=None) -> Bank:
@@ -327,18 +331,6 @@ def teaching_dimension(target: float, greedy_result: GreedyResult, pairs: PairBo
 # ---------------------------------------------------------------- the reference file
 
 
-def _make_task(name: str):
-    if name == "maze":
-        from ..tasks.maze import MazeTask
-
-        return MazeTask()
-    if name == "pickplace":
-        from ..tasks.pickplace import PickPlaceTask
-
-        return PickPlaceTask()
-    raise InvalidParameterError(f"task must be 'maze' or 'pickplace', got {name!r}")
-
-
 def task_reference(
     task,
     draws: int = 3,
@@ -435,7 +427,7 @@ def compute_reference(
         "tasks": {},
     }
     for name in tasks:
-        task = _make_task(name)
+        task = make_task(name)
         subset = None if indices is None else indices.get(name)
         out["tasks"][name] = task_reference(
             task, draws, seed, pair_draws, cap, workers, indices=subset, log=log

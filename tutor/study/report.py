@@ -93,14 +93,15 @@ def check_out_dir(out) -> Path:
 def analyse(result: CohortResult) -> dict:
     """Statistics, tables, relative improvements and the paper's conclusions for a cohort."""
     runs, exp = result.runs, result.experiment
-    st = stats.experiment1_stats(runs) if exp == 1 else stats.experiment2_stats(runs)
+    how = stats.ANALYSES[exp]
+    st = how.tests(runs)
     out = {
         "stats": st,
         "summary": stats.summary_table(runs, exp, st),
         "relative": stats.relative_improvement(st, exp),
         "conclusions": stats.conclusions(runs, exp, st),
     }
-    if exp == 2:
+    if how.failures:
         out["failures"] = stats.failure_table(runs)
         out["replication"] = replication_table(runs)
     return out
@@ -125,35 +126,30 @@ def pct(x) -> str:
     return "n/a" if x is None or not np.isfinite(x) else percent(x)
 
 
-def test_lines(st: dict, experiment: int, lead: str = "") -> list[str]:
-    """The paper's tests on ``st`` (:func:`tutor.study.stats.experiment_1` or ``_2``)
-    beside the paper's values, one line each; ``lead`` names whose they are."""
-    def named(text: str) -> str:  # "Who: repeated-measures ..." or "Repeated-measures ..."
-        return f"{lead}: {text}" if lead else text[0].upper() + text[1:]
+def _anova_lines1(st: dict, named) -> list[str]:
+    a, pa = st["anova"], paper.EXPERIMENT_1["anova"]
+    sph = "holds" if a["sphericity_ok"] else "violated: Greenhouse-Geisser p used"
+    lines = [
+        named(
+            f"repeated-measures ANOVA F({a['ddof1']},{a['ddof2']}) = {a['F']:.3f}, "
+            f"p = {a['p_used']:.3g}   (paper: F({pa['ddof1']},{pa['ddof2']}) = {pa['F']}, "
+            f"p = {pa['p']})"
+        ),
+        f"  Mauchly's sphericity: W = {a['sphericity_W']:.3f}, p = "
+        f"{a['sphericity_p']:.3g} ({sph})",
+    ]
+    for _, r in st["pairwise"].iterrows():
+        pp = paper.EXPERIMENT_1["pairwise_p"].get((r.A, r.B), float("nan"))
+        lines.append(
+            f"  {r.A}-{r.B}: paired t = {r['T']:.2f}, Bonferroni p = {r.p_bonf:.3g}   "
+            f"(paper p = {pp})"
+        )
+    return lines
 
-    lines = []
-    if experiment == 1:
-        a, pa = st["anova"], paper.EXPERIMENT_1["anova"]
-        sph = "holds" if a["sphericity_ok"] else "violated: Greenhouse-Geisser p used"
-        lines.append(
-            named(
-                f"repeated-measures ANOVA F({a['ddof1']},{a['ddof2']}) = {a['F']:.3f}, "
-                f"p = {a['p_used']:.3g}   (paper: F({pa['ddof1']},{pa['ddof2']}) = {pa['F']}, "
-                f"p = {pa['p']})"
-            )
-        )
-        lines.append(
-            f"  Mauchly's sphericity: W = {a['sphericity_W']:.3f}, p = "
-            f"{a['sphericity_p']:.3g} ({sph})"
-        )
-        for _, r in st["pairwise"].iterrows():
-            pp = paper.EXPERIMENT_1["pairwise_p"].get((r.A, r.B), float("nan"))
-            lines.append(
-                f"  {r.A}-{r.B}: paired t = {r['T']:.2f}, Bonferroni p = {r.p_bonf:.3g}   "
-                f"(paper p = {pp})"
-            )
-        return lines
+
+def _anova_lines2(st: dict, named) -> list[str]:
     a, pa = st["anova"], paper.EXPERIMENT_2["mixed_anova"]
+    lines = []
     for key in ("condition", "run", "interaction"):
         r, ref = a[key], pa[key]
         ref_text = (
@@ -177,6 +173,62 @@ def test_lines(st: dict, experiment: int, lead: str = "") -> list[str]:
     return lines
 
 
+#: experiment number -> the lines of the paper's tests
+_ANOVA_LINES = {1: _anova_lines1, 2: _anova_lines2}
+
+
+def test_lines(st: dict, experiment: int, lead: str = "") -> list[str]:
+    """The paper's tests on ``st`` (:func:`tutor.study.stats.experiment_1` or ``_2``)
+    beside the paper's values, one line each; ``lead`` names whose they are."""
+    def named(text: str) -> str:  # "Who: repeated-measures ..." or "Repeated-measures ..."
+        return f"{lead}: {text}" if lead else text[0].upper() + text[1:]
+
+    return _ANOVA_LINES[experiment](st, named)
+
+
+def _report_lines1(result: CohortResult, analysis: dict, n: int) -> list[str]:
+    lines = []
+    rel, prel = analysis["relative"], paper.EXPERIMENT_1["relative"]
+    lines.append(
+        "Relative improvement of median eta: "
+        + ", ".join(f"{k} {pct(rel[k])} (paper {pct(prel[k])})" for k in rel)
+        + "; the paper rounds to 'about 180 %'"
+    )
+    nf = protocol.experiment(1).without_feedback
+    good = int(result.runs.reached_target[result.runs.condition == nf].sum())
+    well, of = paper.EXPERIMENT_1["did_well_without_feedback"], paper.EXPERIMENT_1["n"]
+    lines.append(f"{nf} teachers reaching 90 %: {good} of {n} (paper: {well} of {of} did well)")
+    return lines
+
+
+def _report_lines2(result: CohortResult, analysis: dict, n: int) -> list[str]:
+    lines = []
+    rel, prel = analysis["relative"], paper.EXPERIMENT_2["relative"]
+    lines.append(
+        "BF relative to the mean of NF, RF, SF: "
+        + ", ".join(f"{k} {pct(rel[k])} (paper {pct(prel[k])})" for k in rel)
+    )
+    lines.append("")
+    fail = analysis["failures"].copy()
+    ref = pd.DataFrame(paper.EXPERIMENT_2["failures"]).T[fail.columns]
+    both = fail.astype(str) + " (" + ref.astype(str) + ")"
+    lines.append("Failures over all teachers and runs: simulation (paper)")
+    lines.append(both.to_string())
+    lines.append("")
+    lines.append(
+        "How often each conclusion comes out again with 9 teachers per condition "
+        "(bootstrap over teachers; 'paper's means': conditions rescaled to the paper's "
+        "totals first):"
+    )
+    table = analysis["replication"]
+    lines.append(table.to_string(float_format=lambda v: f"{v:.2f}", na_rep="n/a"))
+    return lines
+
+
+#: experiment number -> its own lines of the plain-text report
+_REPORT_LINES = {1: _report_lines1, 2: _report_lines2}
+
+
 def format_report(result: CohortResult, analysis: dict) -> str:
     """Plain-text report: every table beside the paper's numbers."""
     exp, st = result.experiment, analysis["stats"]
@@ -185,37 +237,7 @@ def format_report(result: CohortResult, analysis: dict) -> str:
     lines.append(readable_table(analysis["summary"]).to_string())
     lines.append("")
     lines += test_lines(st, exp)
-    if exp == 1:
-        rel, prel = analysis["relative"], paper.EXPERIMENT_1["relative"]
-        lines.append(
-            "Relative improvement of median eta: "
-            + ", ".join(f"{k} {pct(rel[k])} (paper {pct(prel[k])})" for k in rel)
-            + "; the paper rounds to 'about 180 %'"
-        )
-        nf = protocol.experiment(exp).without_feedback
-        good = int(result.runs.reached_target[result.runs.condition == nf].sum())
-        well, of = paper.EXPERIMENT_1["did_well_without_feedback"], paper.EXPERIMENT_1["n"]
-        lines.append(f"{nf} teachers reaching 90 %: {good} of {n} (paper: {well} of {of} did well)")
-    else:
-        rel, prel = analysis["relative"], paper.EXPERIMENT_2["relative"]
-        lines.append(
-            "BF relative to the mean of NF, RF, SF: "
-            + ", ".join(f"{k} {pct(rel[k])} (paper {pct(prel[k])})" for k in rel)
-        )
-        lines.append("")
-        fail = analysis["failures"].copy()
-        ref = pd.DataFrame(paper.EXPERIMENT_2["failures"]).T[fail.columns]
-        both = fail.astype(str) + " (" + ref.astype(str) + ")"
-        lines.append("Failures over all teachers and runs: simulation (paper)")
-        lines.append(both.to_string())
-        lines.append("")
-        lines.append(
-            "How often each conclusion comes out again with 9 teachers per condition "
-            "(bootstrap over teachers; 'paper's means': conditions rescaled to the paper's "
-            "totals first):"
-        )
-        table = analysis["replication"]
-        lines.append(table.to_string(float_format=lambda v: f"{v:.2f}", na_rep="n/a"))
+    lines += _REPORT_LINES[exp](result, analysis, n)
     lines.append("")
     lines.append("The paper's conclusions on this cohort:")
     for k, v in analysis["conclusions"].items():
@@ -266,7 +288,7 @@ def save_result(result: CohortResult, analysis: dict, out, figures: bool = True)
         "seed": result.seed,
         "n_teachers": int(result.runs.teacher.nunique()),
         "settings": result.settings.__dict__,
-        "paper": _jsonable(paper.EXPERIMENT_1 if result.experiment == 1 else paper.EXPERIMENT_2),
+        "paper": _jsonable(stats.ANALYSES[result.experiment].paper),
         **_jsonable({k: v for k, v in analysis.items()}),
     }
     paths["summary"].write_text(json.dumps(summary, indent=2, default=str))
@@ -274,10 +296,9 @@ def save_result(result: CohortResult, analysis: dict, out, figures: bool = True)
     if figures:
         import matplotlib.pyplot as plt
 
-        from .figures import experiment1_figure, experiment2_figure
+        from .figures import FIGURES
 
-        draw = experiment1_figure if result.experiment == 1 else experiment2_figure
-        fig = draw(result.runs)
+        fig = FIGURES[result.experiment](result.runs)
         paths["figure"] = out / f"{stem}.png"
         fig.savefig(paths["figure"], dpi=110)
         plt.close(fig)
@@ -304,9 +325,9 @@ def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> p
         row = {"seed": seed, **a["conclusions"]}
         row["all hold"] = all(a["conclusions"].values())
         row.update({f"relative {k}": v for k, v in a["relative"].items()})
-        key = "medians" if experiment == 1 else "means"
-        row.update({f"eta {c}": v for c, v in a["stats"][key].items()})
-        if experiment == 2:
+        how = stats.ANALYSES[experiment]
+        row.update({f"eta {c}": v for c, v in a["stats"][how.key].items()})
+        if how.failures:
             fail = a["failures"]
             for kind in fail.index:
                 row.update({f"{kind} {c}": int(fail.loc[kind, c]) for c in fail.columns})
@@ -452,14 +473,8 @@ def seeds_report(table: pd.DataFrame, experiment: int) -> str:
     experiment = _check_experiment(experiment)
     conds = EXPERIMENTS[experiment].paper_codes
     first, last = int(table["seed"].min()), int(table["seed"].max())
-    kind, ref = (
-        ("median", paper.EXPERIMENT_1["median_eta"])
-        if experiment == 1
-        else (
-            "mean",
-            paper.EXPERIMENT_2["mean_eta"],
-        )
-    )
+    how = stats.ANALYSES[experiment]
+    kind, ref = how.summary, how.paper_eta
     lines = [f"Over seeds {first}-{last} ({len(table)} cohorts of the paper's size):", ""]
     lines.append(f"{kind} eta per condition, mean over the seeds (paper):")
     lines += [f"  {c}: {pct(table[f'eta {c}'].mean())} ({pct(ref[c])})" for c in conds]
@@ -471,9 +486,9 @@ def seeds_report(table: pd.DataFrame, experiment: int) -> str:
             f"  {c[len('relative ') :]}: {pct(values.min())}-{pct(values.max())} "
             f"({pct(values.median())})"
         )
-    if experiment == 2:
+    if how.failures:
         lines.append("failures over all teachers and runs, mean over the seeds (paper):")
-        for failure, counts in paper.EXPERIMENT_2["failures"].items():
+        for failure, counts in how.paper["failures"].items():
             cells = [f"{c} {table[f'{failure} {c}'].mean():.0f} ({counts[c]})" for c in conds]
             lines.append(f"  {failure}: " + ", ".join(cells))
     lines += ["", robustness_summary(table)]

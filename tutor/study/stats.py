@@ -13,6 +13,8 @@ Every function takes the ``runs`` frame of :class:`~tutor.study.cohort.CohortRes
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -30,6 +32,8 @@ __all__ = [
     "summary_table",
     "describe",
     "compare_two",
+    "Analysis",
+    "ANALYSES",
 ]
 
 ALPHA = 0.05
@@ -119,6 +123,27 @@ def experiment1_stats(runs: pd.DataFrame) -> dict:
     return {"anova": anova, "pairwise": pairs, **describe(runs, 1)}
 
 
+def _describe1(data: pd.DataFrame, grouped) -> dict:
+    return {
+        "medians": grouped["eta"].median().to_dict(),
+        "means": grouped["eta"].mean().to_dict(),
+        "demos": grouped["n_demos"].mean().to_dict(),
+        "efficacy_mean": grouped["efficacy"].mean().to_dict(),
+        "efficacy_sd": grouped["efficacy"].std().to_dict(),
+        "reached_target": grouped["reached_target"].sum().astype(int).to_dict(),
+    }
+
+
+def _describe2(data: pd.DataFrame, grouped) -> dict:
+    return {
+        "means": grouped["eta"].mean().to_dict(),
+        "by_run": data.pivot_table(index="condition", columns="run", values="eta", aggfunc="mean"),
+        "demos": grouped["n_demos"].mean().to_dict(),
+        "efficacy_mean": grouped["efficacy"].mean().to_dict(),
+        "seconds": grouped["seconds"].mean().to_dict() if "seconds" in data else {},
+    }
+
+
 def describe(runs: pd.DataFrame, experiment: int) -> dict:
     """The per-condition numbers of a cohort, which need no test (any size, one run too).
 
@@ -128,23 +153,7 @@ def describe(runs: pd.DataFrame, experiment: int) -> dict:
     ``demos``, ``efficacy_mean``, ``seconds`` (mean clock seconds).
     """
     data = _clean(runs)
-    grouped = data.groupby("condition", sort=False)
-    if experiment == 1:
-        return {
-            "medians": grouped["eta"].median().to_dict(),
-            "means": grouped["eta"].mean().to_dict(),
-            "demos": grouped["n_demos"].mean().to_dict(),
-            "efficacy_mean": grouped["efficacy"].mean().to_dict(),
-            "efficacy_sd": grouped["efficacy"].std().to_dict(),
-            "reached_target": grouped["reached_target"].sum().astype(int).to_dict(),
-        }
-    return {
-        "means": grouped["eta"].mean().to_dict(),
-        "by_run": data.pivot_table(index="condition", columns="run", values="eta", aggfunc="mean"),
-        "demos": grouped["n_demos"].mean().to_dict(),
-        "efficacy_mean": grouped["efficacy"].mean().to_dict(),
-        "seconds": grouped["seconds"].mean().to_dict() if "seconds" in data else {},
-    }
+    return ANALYSES[experiment].describe(data, data.groupby("condition", sort=False))
 
 
 def experiment2_stats(runs: pd.DataFrame) -> dict:
@@ -189,12 +198,13 @@ def failure_table(runs: pd.DataFrame) -> pd.DataFrame:
     return sums.loc[order].T.astype(int)
 
 
-def relative_improvement(stats: dict, experiment: int) -> dict:
-    """The paper's relative improvements, from :func:`experiment1_stats` or ``2``."""
-    if experiment == 1:
-        med = stats["medians"]
-        nf = med["NF"] if med["NF"] > 0 else np.nan
-        return {"VF/NF": med["VF"] / nf, "VR/NF": med["VR"] / nf}
+def _relative1(stats: dict) -> dict:
+    med = stats["medians"]
+    nf = med["NF"] if med["NF"] > 0 else np.nan
+    return {"VF/NF": med["VF"] / nf, "VR/NF": med["VR"] / nf}
+
+
+def _relative2(stats: dict) -> dict:
     means, best = stats["means"], PICKPLACE_BEST
     rest = [c for c in PICKPLACE_CONDITIONS if c != best]
     others = np.mean([means[c] for c in rest])
@@ -203,9 +213,35 @@ def relative_improvement(stats: dict, experiment: int) -> dict:
     return {"mean": means[best] / others, "third run": third[best] / others3}
 
 
+def relative_improvement(stats: dict, experiment: int) -> dict:
+    """The paper's relative improvements, from :func:`experiment1_stats` or ``2``."""
+    return ANALYSES[experiment].relative(stats)
+
+
 def _p(pairs: pd.DataFrame, a: str, b: str) -> float:
     hit = pairs[((pairs.A == a) & (pairs.B == b)) | ((pairs.A == b) & (pairs.B == a))]
     return float(hit["p_bonf"].iloc[0]) if len(hit) else float("nan")
+
+
+def _conclusions1(runs: pd.DataFrame, st: dict) -> dict:
+    med, pairs = st["medians"], st["pairwise"]
+    return {
+        "NF<VF": bool(med["NF"] < med["VF"] and _p(pairs, "NF", "VF") < ALPHA),
+        "NF<VR": bool(med["NF"] < med["VR"] and _p(pairs, "NF", "VR") < ALPHA),
+        "VF~VR": bool(_p(pairs, "VF", "VR") >= ALPHA),
+    }
+
+
+def _conclusions2(runs: pd.DataFrame, st: dict) -> dict:
+    fail = failure_table(runs)
+    conds = list(fail.columns)
+    measures = {k: fail.loc[k].to_numpy(float) for k in ("errors", "undemonstrated", "ambiguous")}
+    measures["eta"] = np.array([st["means"][c] for c in conds])
+    ranks = experiment2_ranking(conds, **measures)
+    return {
+        "condition effect": bool(st["anova"]["condition"]["p"] < ALPHA),
+        **{k: bool(v) for k, v in ranks.items()},
+    }
 
 
 def conclusions(runs: pd.DataFrame, experiment: int, stats: dict | None = None) -> dict:
@@ -216,24 +252,8 @@ def conclusions(runs: pd.DataFrame, experiment: int, stats: dict | None = None) 
     ``BF best`` (BF's mean eta above NF, RF and SF), ``BF fewest ambiguous``, ``BF most
     undemonstrated``, ``RF fewest errors`` (ties count as fewest/most).
     """
-    if experiment == 1:
-        st = experiment1_stats(runs) if stats is None else stats
-        med, pairs = st["medians"], st["pairwise"]
-        return {
-            "NF<VF": bool(med["NF"] < med["VF"] and _p(pairs, "NF", "VF") < ALPHA),
-            "NF<VR": bool(med["NF"] < med["VR"] and _p(pairs, "NF", "VR") < ALPHA),
-            "VF~VR": bool(_p(pairs, "VF", "VR") >= ALPHA),
-        }
-    st = experiment2_stats(runs) if stats is None else stats
-    fail = failure_table(runs)
-    conds = list(fail.columns)
-    measures = {k: fail.loc[k].to_numpy(float) for k in ("errors", "undemonstrated", "ambiguous")}
-    measures["eta"] = np.array([st["means"][c] for c in conds])
-    ranks = experiment2_ranking(conds, **measures)
-    return {
-        "condition effect": bool(st["anova"]["condition"]["p"] < ALPHA),
-        **{k: bool(v) for k, v in ranks.items()},
-    }
+    analysis = ANALYSES[experiment]
+    return analysis.conclusions(runs, analysis.tests(runs) if stats is None else stats)
 
 
 def experiment2_ranking(conditions, errors, undemonstrated, ambiguous, eta) -> dict:
@@ -265,6 +285,32 @@ def experiment2_ranking(conditions, errors, undemonstrated, ambiguous, eta) -> d
     }
 
 
+def _table1(st: dict) -> tuple[list, dict]:
+    conds = list(st["medians"])
+    return conds, {
+        "median eta (sim)": [st["medians"][c] for c in conds],
+        "median eta (paper)": [paper.EXPERIMENT_1["median_eta"][c] for c in conds],
+        "mean demos (sim)": [st["demos"][c] for c in conds],
+        "mean efficacy (sim)": [st["efficacy_mean"][c] for c in conds],
+        "sd efficacy (sim)": [st["efficacy_sd"][c] for c in conds],
+        "reached 90 % (sim)": [st["reached_target"][c] for c in conds],
+    }
+
+
+def _table2(st: dict) -> tuple[list, dict]:
+    conds = list(st["means"])
+    third = st["by_run"][st["by_run"].columns.max()]
+    return conds, {
+        "mean eta (sim)": [st["means"][c] for c in conds],
+        "mean eta (paper)": [paper.EXPERIMENT_2["mean_eta"][c] for c in conds],
+        "run 3 eta (sim)": [third[c] for c in conds],
+        "run 3 eta (paper)": [paper.EXPERIMENT_2["third_run_eta"][c] for c in conds],
+        "mean demos (sim)": [st["demos"][c] for c in conds],
+        "mean efficacy (sim)": [st["efficacy_mean"][c] for c in conds],
+        "mean minutes (sim)": [st["seconds"].get(c, np.nan) / 60 for c in conds],
+    }
+
+
 def summary_table(runs: pd.DataFrame, experiment: int, stats: dict | None = None) -> pd.DataFrame:
     """Per condition: the simulation's eta (median or mean) beside the paper's, demos, eps.
 
@@ -272,35 +318,9 @@ def summary_table(runs: pd.DataFrame, experiment: int, stats: dict | None = None
     :func:`describe`'s (the same numbers, no test needed, so a cohort of any size has
     its table).
     """
-    if experiment == 1:
-        st = describe(runs, 1) if stats is None else stats
-        conds = list(st["medians"])
-        return pd.DataFrame(
-            {
-                "median eta (sim)": [st["medians"][c] for c in conds],
-                "median eta (paper)": [paper.EXPERIMENT_1["median_eta"][c] for c in conds],
-                "mean demos (sim)": [st["demos"][c] for c in conds],
-                "mean efficacy (sim)": [st["efficacy_mean"][c] for c in conds],
-                "sd efficacy (sim)": [st["efficacy_sd"][c] for c in conds],
-                "reached 90 % (sim)": [st["reached_target"][c] for c in conds],
-            },
-            index=conds,
-        )
-    st = describe(runs, 2) if stats is None else stats
-    conds = list(st["means"])
-    third = st["by_run"][st["by_run"].columns.max()]
-    return pd.DataFrame(
-        {
-            "mean eta (sim)": [st["means"][c] for c in conds],
-            "mean eta (paper)": [paper.EXPERIMENT_2["mean_eta"][c] for c in conds],
-            "run 3 eta (sim)": [third[c] for c in conds],
-            "run 3 eta (paper)": [paper.EXPERIMENT_2["third_run_eta"][c] for c in conds],
-            "mean demos (sim)": [st["demos"][c] for c in conds],
-            "mean efficacy (sim)": [st["efficacy_mean"][c] for c in conds],
-            "mean minutes (sim)": [st["seconds"].get(c, np.nan) / 60 for c in conds],
-        },
-        index=conds,
-    )
+    st = describe(runs, experiment) if stats is None else stats
+    conds, columns = ANALYSES[experiment].table(st)
+    return pd.DataFrame(columns, index=conds)
 
 
 def compare_two(runs: pd.DataFrame, a: str, b: str, experiment: int) -> dict:
@@ -320,8 +340,9 @@ def compare_two(runs: pd.DataFrame, a: str, b: str, experiment: int) -> dict:
     """
     data = _clean(runs)
     data = data[data.condition.isin([a, b])]
-    out = {"test": "paired t" if experiment == 1 else "Welch t", "T": np.nan, "p": np.nan}
-    if experiment == 1:
+    paired = ANALYSES[experiment].paired
+    out = {"test": "paired t" if paired else "Welch t", "T": np.nan, "p": np.nan}
+    if paired:
         wide = data.pivot_table(index="teacher", columns="condition", values="eta")
         wide = wide.reindex(columns=[a, b]).dropna()
         x, y = wide[a].to_numpy(float), wide[b].to_numpy(float)
@@ -330,10 +351,71 @@ def compare_two(runs: pd.DataFrame, a: str, b: str, experiment: int) -> dict:
         x = means.loc[means.condition == a, "eta"].to_numpy(float)
         y = means.loc[means.condition == b, "eta"].to_numpy(float)
     out.update(n_a=len(x), n_b=len(y))
-    if min(len(x), len(y)) < 2 or np.ptp(x - y if experiment == 1 else np.r_[x, y]) == 0:
+    if min(len(x), len(y)) < 2 or np.ptp(x - y if paired else np.r_[x, y]) == 0:
         return out
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = _pg().ttest(x, y, paired=experiment == 1, correction=experiment != 1)
+        res = _pg().ttest(x, y, paired=paired, correction=not paired)
     out.update(T=float(res["T"].iloc[0]), p=float(res[_col(res, "p_val", "p-val")].iloc[0]))
     return out
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """How the paper analysed one experiment: the parts :func:`describe`,
+    :func:`conclusions`, :func:`relative_improvement`, :func:`summary_table` and
+    :func:`compare_two` use.
+
+    Attributes
+    ----------
+    summary : str
+        How the paper sums up eta per condition: "median" (Experiment 1) or "mean".
+    paired : bool
+        Within subjects: conditions are compared teacher by teacher (paired t).
+    paper : dict
+        The paper's numbers (:data:`tutor.paper.EXPERIMENT_1` or ``2``).
+    tests, describe, relative, conclusions, table : callable
+        The statistics with their tests (``runs -> dict``), the numbers without
+        (``data, grouped -> dict``), the relative improvements, the conclusions
+        (``runs, stats -> dict``) and the summary table's columns.
+    class_column : callable
+        A class's own column beside the shared ones (``grouped -> (name, Series)``):
+        runs that reached 90 % (Experiment 1), mean minutes on the clock (Experiment 2).
+    failures : bool
+        The paper reports a table of teaching failures (:func:`failure_table`).
+    """
+
+    summary: str
+    paired: bool
+    paper: dict
+    tests: Callable
+    describe: Callable
+    relative: Callable
+    conclusions: Callable
+    table: Callable
+    class_column: Callable
+    failures: bool = False
+
+    @property
+    def paper_eta(self) -> dict:
+        """The paper's eta per condition, summed up as :attr:`summary` says."""
+        return self.paper[f"{self.summary}_eta"]
+
+    @property
+    def key(self) -> str:
+        """The key of the per-condition summary in :func:`describe`'s dict."""
+        return self.summary + "s"
+
+
+#: experiment number -> how the paper analysed it
+ANALYSES = {
+    1: Analysis(
+        "median", True, paper.EXPERIMENT_1, experiment1_stats, _describe1, _relative1,
+        _conclusions1, _table1, lambda g: ("reached 90 %", g["reached_target"].sum()),
+    ),
+    2: Analysis(
+        "mean", False, paper.EXPERIMENT_2, experiment2_stats, _describe2, _relative2,
+        _conclusions2, _table2, lambda g: ("mean minutes", g["seconds"].mean() / 60),
+        failures=True,
+    ),
+}

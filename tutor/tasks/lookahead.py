@@ -48,8 +48,6 @@ __all__ = [
 MAX_TRIES = 5
 #: exact efficacies compare equal within this (eps is a share of at most a few hundred)
 EPS_TOL = 1e-12
-#: the jitter (m) of a scripted maze demo's guide points (the steadiest simulated hand)
-SCRIPTED_JITTER = 0.002
 
 
 # ---------------------------------------------------------------- the bank
@@ -90,19 +88,10 @@ class Bank:
 
 
 def scripted_recording(task, index: int, rng) -> np.ndarray:
-    """A careful scripted recording for condition ``index``, made by the task itself.
-
-    Maze: :meth:`~tutor.tasks.maze.MazeLayout.reference_path` from the start point with
-    2 mm of hand jitter on its guide points. Pick-and-place:
-    :meth:`~tutor.tasks.pickplace.PickPlaceTask.demonstrate` with no mistake.
-    """
-    if task.name == "maze":
-        return task.layout.reference_path(task.conditions[index], rng, jitter=SCRIPTED_JITTER)
-    if task.name == "pickplace":
-        return task.demonstrate(int(index), rng)
-    raise InvalidParameterError(
-        f"scripted demos exist for the tasks 'maze' and 'pickplace', got {task.name!r}"
-    )
+    """A careful scripted recording for condition ``index``, made by the task itself
+    (:meth:`~tutor.framework.task.Task.scripted_demo`): the maze's reference path with
+    2 mm of hand jitter, pick-and-place's kinesthetic hand with no mistake."""
+    return task.scripted_demo(index, rng)
 
 
 def make_bank(task, draws: int = 3, seed: int = 0, indices=None, recording=None) -> Bank:

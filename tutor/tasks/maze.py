@@ -41,6 +41,8 @@ from .paths import minimum_jerk_through
 __all__ = ["Box", "MazeLayout", "MazeTask", "load_layout", "DEFAULT_LAYOUT_PATH"]
 
 DEFAULT_LAYOUT_PATH = asset("maze.json")
+#: the jitter (m) of a scripted demo's guide points (the steadiest simulated hand)
+SCRIPTED_JITTER = 0.002
 
 
 @dataclass(frozen=True)
@@ -51,7 +53,8 @@ class Box:
     x1: float
     y0: float
     y1: float
-    name: str = ""
+    name: str = ""  #: in sentences ("obstacle 2 (right-hand)")
+    label: str = ""  #: short, on pictures and in counts ("obstacle 2"); the name if unset
 
     @property
     def center(self) -> np.ndarray:
@@ -70,7 +73,8 @@ class Box:
     @classmethod
     def from_dict(cls, data: dict, name: str = "") -> Box:
         (x0, x1), (y0, y1) = data["x"], data["y"]
-        return cls(float(x0), float(x1), float(y0), float(y1), data.get("name", name))
+        full = data.get("name", name)
+        return cls(float(x0), float(x1), float(y0), float(y1), full, data.get("label", full))
 
 
 @dataclass(frozen=True)
@@ -234,6 +238,14 @@ class MazeTask(Task):
     def format_distance(self, distance: float) -> str:
         return f"{100 * distance:.1f} cm"
 
+    def obstacle_name(self, index: int) -> str:
+        return self.layout.obstacles[int(index)].name
+
+    def scripted_demo(self, index: int, rng) -> np.ndarray:
+        """:meth:`MazeLayout.reference_path` from start point ``index`` with
+        :data:`SCRIPTED_JITTER` of hand jitter on its guide points."""
+        return self.layout.reference_path(self.conditions[index], rng, jitter=SCRIPTED_JITTER)
+
     def condition_of(self, demo: np.ndarray) -> np.ndarray:
         return np.asarray(demo)[0, 1:3]
 
@@ -300,8 +312,7 @@ class MazeTask(Task):
                 k = int(np.argmax(bad_sample[i]))
                 hit = np.flatnonzero(in_obstacle[:, i, k])
                 if hit.size:
-                    name = lay.obstacles[hit[0]].name
-                    parts.append(Reason("obstacle", k, n_samples, obstacle=name))
+                    parts.append(Reason("obstacle", k, n_samples, obstacle=int(hit[0])))
                 else:
                     parts.append(Reason("outside", k, n_samples))
             if not ends_ok[i]:

@@ -16,9 +16,11 @@ VA  visual feedback, adaptive: after every demo the robot shows only the k = 5 s
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..framework import TeachingRun
 from ..framework.protocol import experiment
-from ..framework.session import FeedbackRecord
+from ..framework.session import DemoStep
 from .maze_rules import RuleAdvice, advise, followed
 
 __all__ = ["MazeRun", "PHASE_ORDER"]
@@ -46,7 +48,7 @@ class MazeRun(TeachingRun):
         self._advice = (self.session, self.session.latest, advice)
         return advice
 
-    def add_demo(self, raw, **options) -> FeedbackRecord:
+    def add_demo(self, raw, **options) -> DemoStep:
         """Add a demo; in VR its compliance with the rule in force is recorded.
 
         ``given`` (how it was given) is "drawn" unless the options say otherwise: a
@@ -63,6 +65,13 @@ class MazeRun(TeachingRun):
     def _rule_followed(self, demo) -> bool | None:
         rule = self._rule_in_force
         return None if rule is None else followed(rule, self.task.condition_of(demo))
+
+    def study_columns(self) -> dict:
+        """``followed_rules``: the share of demos that followed VR's rule (NaN in a
+        condition without the rule, or before any demo)."""
+        compliance = self.compliance
+        rules = self.protocol_condition.rules and compliance
+        return {"followed_rules": float(np.mean(compliance)) if rules else np.nan}
 
     @property
     def compliance(self) -> list[bool]:

@@ -31,7 +31,7 @@ from ..errors import InvalidDemoError, InvalidParameterError
 from ..fileio import read_json
 from ..framework.task import Reason, Task, Verdict
 from ..resources import asset
-from ..robot.feasibility import first_failure
+from ..robot.feasibility import first_bad_sample
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
 from . import kinesthetic
 
@@ -296,6 +296,10 @@ class PickPlaceTask(Task):
         cols = [np.interp(self._times, s, demo[:, j]) for j in range(1, 5)]
         return np.column_stack([self._times, *cols])
 
+    def scripted_demo(self, index: int, rng) -> np.ndarray:
+        """:meth:`demonstrate` to plant ``index`` with no mistake."""
+        return self.demonstrate(int(index), rng)
+
     def demonstrate(self, plant: int, rng=None, mistake: str | None = None, rate_hz=20.0):
         """A kinesthetic-style demonstration to ``plant`` as a person would give it.
 
@@ -356,7 +360,7 @@ class PickPlaceTask(Task):
         bad = below_table | in_tray
         n = traj.shape[1]
         if self.feasibility is None:
-            first_bad = first_failure(bad)
+            first_bad = first_bad_sample(bad)
         else:  # a path is judged by its first failure: the arm is followed up to it
             first_bad = self.feasibility.first_outside(pos, traj[..., 3], known_bad=bad)
         grab, release = self._events(traj)

@@ -268,6 +268,10 @@ class PickPlaceRun(TeachingRun):
     def realisation_seconds(self) -> float:
         return self.task.scene.realisation_seconds
 
+    def study_columns(self) -> dict:
+        """``seconds``: the run's clock (:attr:`elapsed`)."""
+        return {"seconds": self.elapsed}
+
     @property
     def elapsed(self) -> float:
         """Seconds used: demos, plus 25 s for every realisation shown during the run.

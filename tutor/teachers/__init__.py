@@ -15,6 +15,9 @@ from .model import Belief, TeacherModel
 from .pickplace import PickPlaceTeacher
 from .traits import DEFAULT_POPULATION, Population, TeacherTraits
 
+#: task name -> the simulated teacher of that task
+TEACHERS = {"maze": MazeTeacher, "pickplace": PickPlaceTeacher}
+
 __all__ = [
     "Belief",
     "DEFAULT_POPULATION",
@@ -23,4 +26,5 @@ __all__ = [
     "Population",
     "TeacherModel",
     "TeacherTraits",
+    "TEACHERS",
 ]

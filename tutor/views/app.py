@@ -56,7 +56,7 @@ class TutorApp:
     run_class : type of TeachingRun
     condition : str
     task : Task
-    session_file : path or None
+    run_file : path or None
         Where the run autosaves; an existing file of the same run is resumed.
     trainee : str, optional
         The trainee's name (default ``JUPYTERHUB_USER`` on a hub, else "trainee").
@@ -84,7 +84,7 @@ class TutorApp:
         run_class: type[TeachingRun],
         condition: str,
         task,
-        session_file=None,
+        run_file=None,
         trainee=None,
         run: int = 1,
         practice: bool = False,
@@ -93,7 +93,7 @@ class TutorApp:
             run_class,
             condition,
             task,
-            session_file,
+            run_file,
             trainee,
             run,
             practice,
@@ -108,7 +108,7 @@ class TutorApp:
     run_class = property(lambda self: self.controller.run_class)
     task = property(lambda self: self.controller.task)
     trainee = property(lambda self: self.controller.trainee)
-    session_file = property(lambda self: self.controller.session_file)
+    run_file = property(lambda self: self.controller.run_file)
     read_only = property(lambda self: self.controller.read_only)
     unsaved = property(lambda self: self.controller.unsaved)
 
@@ -269,11 +269,11 @@ class TutorApp:
             return "read-only (its file cannot be locked)"
         if self.read_only:
             return "read-only (open in another tutor)"
-        if self.session_file is None:
+        if self.run_file is None:
             return "not saved to a file"
         if self.unsaved:
-            return f"<b>not saved yet</b> to {html.escape(self.session_file.name)}"
-        return f"saved to {html.escape(self.session_file.name)}"
+            return f"<b>not saved yet</b> to {html.escape(self.run_file.name)}"
+        return f"saved to {html.escape(self.run_file.name)}"
 
     def message_html(self) -> str:
         if not self.message:

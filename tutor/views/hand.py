@@ -31,6 +31,7 @@ from ..runtime import env_text
 __all__ = [
     "Hand",
     "HANDS",
+    "HAND_TASKS",
     "HAND_ENV",
     "DEFAULT_HAND",
     "check_hand",
@@ -90,6 +91,9 @@ def _said(gesture: str, keys, kbd=lambda key: key) -> str:
 
 
 #: the hands, by code (the first is the default)
+#: the tasks taught with a hand on the arm (the maze is drawn with the pointer)
+HAND_TASKS = ("pickplace",)
+
 HANDS = {
     "own": Hand(
         code="own",

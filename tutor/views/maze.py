@@ -39,7 +39,7 @@ from matplotlib.patches import Circle, Patch, Rectangle
 from matplotlib.ticker import FuncFormatter, MultipleLocator
 
 from ..tasks.maze import load_layout
-from .maze_reasons import failures, reason_summary
+from .maze_reasons import main_causes, reason_summary
 from .style import (
     DEMO,
     FAIL,
@@ -317,7 +317,7 @@ def plot_feedback(session, ax=None, step=-1, reveal=False):
     found = []
     if drawn.size:
         mean = realisations_at(session, i)
-        found = failures(mean, record.causes, task.layout)
+        found = main_causes(mean, record.causes, task.layout)
         if highlight:
             rest = np.setdiff1d(np.arange(n), shown)
             _draw_realisations(ax, mean, passed, rest, linewidth=0.5, alpha=0.3, zorder=1)

@@ -44,7 +44,7 @@ class MazeTutor(TutorApp):
     ----------
     condition : {"NF", "VF", "VR", "VA"}
         VA (beyond the paper): only the k start points a selector picks are shown.
-    session_file : path, optional
+    run_file : path, optional
         Where the run autosaves; an existing file of the same run is resumed.
     task : MazeTask, optional
     width_px : int
@@ -61,14 +61,14 @@ class MazeTutor(TutorApp):
     def __init__(
         self,
         condition: str = "VF",
-        session_file=None,
+        run_file=None,
         task=None,
         width_px: int = 360,
         trainee=None,
         practice: bool = False,
     ):
         task = MazeTask() if task is None else task
-        super().__init__(MazeRun, condition, task, session_file, trainee, practice=practice)
+        super().__init__(MazeRun, condition, task, run_file, trainee, practice=practice)
         self.pad = Sketchpad(maze=layout_spec(self.task.layout), width_px=width_px)
         self.panel = w.HTML(layout=w.Layout(width="380px"))
         self.buttons = {

@@ -3,7 +3,7 @@
 The maze task's criteria (:meth:`tutor.tasks.maze.MazeTask.judge`) give every failing
 realisation its causes as data (:class:`tutor.framework.task.Reason`: an obstacle hit at
 sample 97 of 200, an end 5.1 cm from the target). :func:`classify` picks the main cause
-(the first thing that went wrong along the path), :func:`failures` adds where on the
+(the first thing that went wrong along the path), :func:`main_causes` adds where on the
 path it happened, and :func:`reason_summary` counts the causes, e.g. "93 miss the
 target by 1–4 mm; 12 hit obstacle 2". No words are read back.
 
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Failure", "KINDS", "classify", "failures", "reason_summary"]
+__all__ = ["KINDS", "MainCause", "classify", "main_causes", "reason_summary"]
 
 #: the causes, in the order a summary lists equal counts; "pass" is no failure
 KINDS = ("pass", "obstacle", "outside", "start", "miss", "other")
@@ -26,7 +26,7 @@ KINDS = ("pass", "obstacle", "outside", "start", "miss", "other")
 NEAR_MISS = 0.005
 
 @dataclass(frozen=True)
-class Failure:
+class MainCause:
     """The main cause of one realisation's failure.
 
     Attributes
@@ -40,7 +40,7 @@ class Failure:
         Short name of the obstacle hit ("obstacle 2"), else "".
     point : tuple of float or None
         Where it went wrong (metres): the first bad sample, the start (kind "start")
-        or the end (kind "miss"); set by :func:`failures`.
+        or the end (kind "miss"); set by :func:`main_causes`.
     miss : float
         How far the end is from the target's edge (metres), for every realisation.
     """
@@ -52,37 +52,45 @@ class Failure:
     miss: float = 0.0
 
 
-def classify(causes) -> Failure:
+def classify(causes, layout=None) -> MainCause:
     """The main cause among one realisation's causes (a tuple of
     :class:`~tutor.framework.task.Reason`; empty means it passes).
+
+    ``layout`` (a :class:`~tutor.tasks.maze.MazeLayout`) gives an obstacle hit its short
+    label ("obstacle 2"); without one it is numbered.
 
     A path that hits an obstacle or leaves the workspace is counted by that, even when
     it also ends away from the target: the end follows from the crash.
     """
     if not causes:
-        return Failure("pass")
+        return MainCause("pass")
     by_kind = {r.kind: r for r in causes}
     if "obstacle" in by_kind:
         r = by_kind["obstacle"]
-        return Failure("obstacle", r.sample, r.obstacle.split(" (")[0])
+        i = r.obstacle
+        if i is None:
+            label = "an obstacle"
+        else:
+            label = layout.obstacles[i].label if layout is not None else f"obstacle {i + 1}"
+        return MainCause("obstacle", r.sample, label)
     if "outside" in by_kind:
-        return Failure("outside", by_kind["outside"].sample)
+        return MainCause("outside", by_kind["outside"].sample)
     if "start" in by_kind:
-        return Failure("start")
+        return MainCause("start")
     if "end" in by_kind:
-        return Failure("miss")
-    return Failure("other")
+        return MainCause("miss")
+    return MainCause("other")
 
 
-def failures(paths, causes, layout) -> list[Failure]:
-    """Each realisation's :class:`Failure`, with the point where it went wrong.
+def main_causes(paths, causes, layout) -> list[MainCause]:
+    """Each realisation's :class:`MainCause`, with the point where it went wrong.
 
     Parameters
     ----------
     paths : ndarray (n, T, 2)
         The realisations R^ (metres), at the resolution they were judged.
     causes : sequence of tuple of Reason, length n
-        The task's causes (``Verdict.causes``, ``FeedbackRecord.causes``; empty for a
+        The task's causes (``Verdict.causes``, ``DemoStep.causes``; empty for a
         realisation that passes).
     layout : MazeLayout
         For the target (the miss is measured from its edge).
@@ -92,7 +100,7 @@ def failures(paths, causes, layout) -> list[Failure]:
     ends = paths[:, -1] if len(paths) else np.zeros((0, 2))
     miss = np.linalg.norm(ends - layout.target_center, axis=1) - layout.target_radius
     for i, found in enumerate(causes):
-        f = classify(found)
+        f = classify(found, layout)
         if f.kind in ("obstacle", "outside"):
             point = paths[i, min(f.sample, paths.shape[1] - 1)]
         elif f.kind == "start":
@@ -102,7 +110,7 @@ def failures(paths, causes, layout) -> list[Failure]:
         else:
             point = None
         out.append(
-            Failure(
+            MainCause(
                 f.kind,
                 f.sample,
                 f.obstacle,
@@ -126,8 +134,8 @@ def reason_summary(found, shown=None) -> str:
 
     Parameters
     ----------
-    found : sequence of Failure
-        From :func:`failures`.
+    found : sequence of MainCause
+        From :func:`main_causes`.
     shown : sequence of int, optional
         Indices of the realisations to count (default all).
 
@@ -139,7 +147,7 @@ def reason_summary(found, shown=None) -> str:
         none of them fails.
     """
     idx = range(len(found)) if shown is None else [int(i) for i in shown]
-    groups: dict[tuple, list[Failure]] = {}
+    groups: dict[tuple, list[MainCause]] = {}
     for i in idx:
         f = found[i]
         if f.kind == "pass":

@@ -80,7 +80,7 @@ class PickPlaceTutor(TutorApp):
     Parameters
     ----------
     condition : {"NF", "RF", "BF", "SF", "AF", "HF"}
-    session_file : path, optional
+    run_file : path, optional
         Autosave after every demonstration; an existing file of the same run is resumed.
     task : PickPlaceTask, optional
     scene3d : object with ``update(run, status)``, optional
@@ -115,7 +115,7 @@ class PickPlaceTutor(TutorApp):
     def __init__(
         self,
         condition="BF",
-        session_file=None,
+        run_file=None,
         task=None,
         scene3d=None,
         seed=None,
@@ -125,7 +125,7 @@ class PickPlaceTutor(TutorApp):
         hand: str | None = None,
     ):
         task = PickPlaceTask() if task is None else task
-        super().__init__(PickPlaceRun, condition, task, session_file, trainee, run, practice)
+        super().__init__(PickPlaceRun, condition, task, run_file, trainee, run, practice)
         self.scene3d = scene3d
         self.hand, hand_note = self._hand_for(hand, scene3d)
         self._guide_plant: int | None = None  # the plant meant while the trainee guides

@@ -27,7 +27,7 @@ import traitlets
 
 from ..errors import InvalidParameterError
 from . import style
-from .maze_reasons import failures, reason_summary
+from .maze_reasons import main_causes, reason_summary
 
 __all__ = ["Sketchpad", "layout_spec", "KEYBOARD_HELP", "DISCONNECTED"]
 
@@ -79,7 +79,7 @@ def _unpack(data: bytes, samples: int) -> list:
 
 
 class _MazeLayout:
-    """The geometry :func:`failures` needs, read back from a :func:`layout_spec` dict."""
+    """The geometry :func:`main_causes` needs, read back from a :func:`layout_spec` dict."""
 
     def __init__(self, spec: dict):
         self.target_center = np.asarray(spec["target"]["center"], dtype=float)
@@ -192,7 +192,7 @@ class Sketchpad(anywidget.AnyWidget):
         note : str
         causes : sequence of tuple of Reason (n,), optional
             Why each realisation fails (empty where it passes), as the task's ``judge``
-            gives them (``FeedbackRecord.causes``). With them, each shown failure is
+            gives them (``DemoStep.causes``). With them, each shown failure is
             marked where it went wrong and the causes are counted under the picture.
         """
         shown = [int(i) for i in shown]
@@ -203,7 +203,7 @@ class Sketchpad(anywidget.AnyWidget):
                     f"causes has {len(causes)} entries for {len(realisations)} "
                     "realisations; give one per realisation (empty where it passes)"
                 )
-            found = failures(realisations, causes, self._geometry)
+            found = main_causes(realisations, causes, self._geometry)
             for i in shown:
                 f = found[i]
                 if f.kind != "pass":

@@ -15,7 +15,7 @@ instruction and worked example (:mod:`tutor.views.worked_example`):
 
 When every run is finished the trainee's scores are shown beside the paper's.
 
-Run files go to ``tutor.runtime.session_dir(name)``: ``NF.json``, ``VF.json``,
+Run files go to ``tutor.runtime.trainee_dir(name)``: ``NF.json``, ``VF.json``,
 ``VR.json`` and ``pickplace_<condition>_run<k>.json`` (practice runs get the prefix
 ``practice_``, so they never mix with the counted ones). A run file that exists is
 resumed, so running the cell again after a restart carries on where the trainee was.
@@ -58,7 +58,7 @@ from ..runtime import (
     env_text,
     headless,
     normalise_name,
-    session_dir,
+    trainee_dir,
     trainee_key,
 )
 from ..tasks.maze_run import PHASE_ORDER
@@ -266,7 +266,7 @@ class StartForm:
                 self._confirming = asked
                 self.confirm.layout.display = None
                 return
-            folder = session_dir(name)
+            folder = trainee_dir(name)
         except TutorError as exc:
             self._say(str(exc), problem=True)
             return
@@ -429,7 +429,7 @@ class MazeExperiment(StartForm):
         from .maze_app import MazeTutor
 
         return MazeTutor(
-            step["condition"], session_file=path, trainee=self.trainee, practice=self.practice_run
+            step["condition"], run_file=path, trainee=self.trainee, practice=self.practice_run
         )
 
     def autoplay_one(self, tutor) -> None:

@@ -52,7 +52,7 @@ from ..framework.assignment import plan_from_env
 from ..framework.protocol import run_file_name
 from ..framework.record import RunRecord
 from ..payloads import check_choice
-from ..runtime import env_text, headless, sessions_root, trainee_key
+from ..runtime import env_text, headless, runs_root, trainee_key
 from ..tasks.pickplace_protocol import RUNS, PickPlaceRun
 from .hand import HAND_SOURCES, HANDS, hand_and_source
 from .start import HEADLESS_TRAINEE, StartForm
@@ -108,7 +108,7 @@ def condition_from_env() -> str | None:
 def counted_runs(name: str, experiment: int = 2) -> dict[str, tuple[int, int]]:
     """The counted runs of ``name`` in ``experiment``, read from their folder.
 
-    Every ``*.json`` file of the trainee's folder (:func:`tutor.runtime.sessions_root`) that
+    Every ``*.json`` file of the trainee's folder (:func:`tutor.runtime.runs_root`) that
     reads as a :class:`~tutor.framework.RunRecord` of this experiment, of this trainee and
     not a practice run counts, as the class analysis counts it. A file that cannot be read
     is not counted here (the class analysis lists it with the reason).
@@ -120,7 +120,7 @@ def counted_runs(name: str, experiment: int = 2) -> dict[str, tuple[int, int]]:
         (files by name).
     """
     key = trainee_key(name)
-    folder = sessions_root() / key
+    folder = runs_root() / key
     found: dict[str, tuple[int, int]] = {}
     if not folder.is_dir():
         return found
@@ -420,7 +420,7 @@ class PickPlaceExperiment(StartForm):
             task = scene.task
         tutor = PickPlaceTutor(
             step["condition"],
-            session_file=path,
+            run_file=path,
             task=task if task is not None else self._task,
             trainee=self.trainee,
             run=step["run"],
@@ -448,7 +448,7 @@ class PickPlaceExperiment(StartForm):
         if tutor.scene3d is None:
             print(f"Run {run} has no 3-D view (the experiment was made with scene3d=False).")
             return None
-        stem = Path(tutor.session_file or run_file_name(2, tutor.condition, run)).stem
+        stem = Path(tutor.run_file or run_file_name(2, tutor.condition, run)).stem
         saved = tutor.scene3d.save_html(self.folder / f"{stem}_3d.html")
         print(f"Saved {saved} ({saved.stat().st_size / 1e6:.1f} MB)")
         animation = tutor.scene3d.animation

@@ -188,11 +188,11 @@ def compose(
     Parameters
     ----------
     task : Task
-    record : FeedbackRecord or None
+    record : DemoStep or None
         The feedback after the latest demo (None before the first).
     vis : Visibility
         What the trainee may see (:meth:`tutor.framework.TeachingRun.visibility`).
-    history : sequence of FeedbackRecord
+    history : sequence of DemoStep
         The earlier records (for "90 % reached" said once, and earlier wrong demos).
     rule_message : str, optional
         VR: the rule that applies next; HF: the next-demo hint (:func:`hint_sentence`).

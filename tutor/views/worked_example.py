@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..framework import Trainee, protocol
-from .hand import HANDS, check_hand, controls_html
+from .hand import HAND_TASKS, HANDS, check_hand, controls_html
 from .style import AMBIGUOUS, DEMO, FAIL, PASS, UNKNOWN
 
 __all__ = [
@@ -70,10 +70,7 @@ def example_png(experiment: int, condition: str) -> bytes:
 
     fig, axes = plt.subplots(1, 3, figsize=(9.0, 3.6), layout="constrained")
     try:
-        if experiment == 1:
-            _maze_frames(axes, condition)
-        else:
-            _pickplace_frames(axes, condition)
+        EXAMPLE_FRAMES[protocol.experiment(experiment).task](axes, condition)
         buffer = io.BytesIO()
         fig.savefig(buffer, format="png", dpi=80)
     finally:
@@ -108,7 +105,8 @@ def instruction_widget(
 ):
     """The instruction and the worked example as one widget (CSS class ``lfd-instruction``).
 
-    In Experiment 2, ``hand`` (a hand's code, or None for none) adds the
+    ``hand`` (a hand's code, or None for none) adds, in a task taught with a hand
+    (:data:`~tutor.views.hand.HAND_TASKS`: pick-and-place), the
     :func:`controls_step` under the example (``first``: the trainee's first run).
     """
     import ipywidgets as w
@@ -124,7 +122,7 @@ def instruction_widget(
     alt = html.escape(f"Worked example in three pictures: {words}")
     frames = w.HTML(f'<img src="data:image/png;base64,{png}" alt="{alt}" style="max-width:720px">')
     parts = [heading, frames]
-    if experiment == 2 and hand is not None:
+    if hand is not None and protocol.experiment(experiment).task in HAND_TASKS:
         parts.append(controls_step(hand, practice, first))
     box = w.VBox(parts)
     box.add_class("lfd-instruction")
@@ -267,3 +265,7 @@ def _square(x, y, colour):
     import matplotlib.patches as mpatches
 
     return mpatches.Rectangle((x - 0.42, y - 0.42), 0.84, 0.84, color=colour, lw=0)
+
+
+#: task name -> the three frames of its worked example
+EXAMPLE_FRAMES = {"maze": _maze_frames, "pickplace": _pickplace_frames}
