@@ -28,7 +28,7 @@ from tutor.study.adaptive import (
     teach_policy,
 )
 from tutor.study.adaptive_report import load_study, paper_bf_undemonstrated_per_run
-from tutor.study.cohort import _rng, simulate_teacher
+from tutor.study.cohort import simulate_teacher, teacher_rng
 from tutor.teachers.pickplace import PickPlaceTeacher
 from tutor.teachers.traits import DEFAULT_POPULATION
 
@@ -123,8 +123,8 @@ def test_traced_af_run_is_the_teachers_own_run():
     """The study's traced run is made as PickPlaceTeacher.teach makes its own (the random
     selector's generator spawned from the run's), so tracing changes no number."""
     rows, curve = teach_policy("RAND2", 3, 5, runs=1)
-    traits = DEFAULT_POPULATION.sample(_rng(3, 2, 5, 0))
-    run = PickPlaceTeacher(traits).teach("AF", _rng(3, 2, 5, 1), selector="random", k=2)
+    traits = DEFAULT_POPULATION.sample(teacher_rng(3, 2, 5, 0))
+    run = PickPlaceTeacher(traits).teach("AF", teacher_rng(3, 2, 5, 1), selector="random", k=2)
     assert rows[0]["efficacy"] == run.session.latest.efficacy
     assert rows[0]["n_demos"] == run.session.n_demos
     assert rows[0]["seconds"] == pytest.approx(run.elapsed)
@@ -135,7 +135,7 @@ def test_traced_af_run_is_the_teachers_own_run():
 
 
 def test_policy_traits_change_only_compliance():
-    traits = DEFAULT_POPULATION.sample(_rng(0, 2, 0, 0))
+    traits = DEFAULT_POPULATION.sample(teacher_rng(0, 2, 0, 0))
     assert POLICIES["BF"].traits(traits) is traits
     if "compliance" in {f.name for f in dataclasses.fields(traits)}:
         hinted = POLICIES["HF0.5"].traits(traits)

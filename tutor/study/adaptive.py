@@ -61,7 +61,7 @@ import numpy as np
 import pandas as pd
 
 from ..workers import one_blas_thread, process_pool
-from .adaptive_arm import TracedRun, _job, teach_policy
+from .adaptive_arm import TracedRun, arm_job, teach_policy
 from .adaptive_plan import (
     DEFAULT_POLICIES,
     DEFAULT_VARIANT,
@@ -295,10 +295,10 @@ def run_study(
         if workers == 1 or not jobs:
             one_blas_thread()
             for job in jobs:
-                keep(*_job(job))
+                keep(*arm_job(job))
         else:
             with process_pool(workers) as pool:
-                for key, rows, curve in pool.map(_job, jobs, chunksize=2):
+                for key, rows, curve in pool.map(arm_job, jobs, chunksize=2):
                     keep(key, rows, curve)
     finally:
         if bar is not None:

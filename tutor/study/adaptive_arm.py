@@ -3,7 +3,7 @@ r"""One teacher's runs in one arm of the adaptive-feedback study, traced demo by
 :func:`teach_policy` teaches a simulated teacher's runs in one arm (:mod:`.adaptive_plan`)
 with the study's common random numbers (see :mod:`.adaptive`), on a run that keeps the
 study's trace (:class:`TracedRun`: :math:`\varepsilon` against the clock after every demo
-and every demo taken back, and the robot's seconds); :func:`_job` is the same for one
+and every demo taken back, and the robot's seconds); :func:`arm_job` is the same for one
 unit of work in a worker process.
 """
 
@@ -15,7 +15,7 @@ import numpy as np
 
 from ..teachers.traits import DEFAULT_POPULATION, Population
 from .adaptive_plan import DEFAULT_VARIANT, EXPERIMENT, POLICIES, SETTINGS, VARIANTS, Policy
-from .cohort import StudySettings, _rng, _task, rows_of
+from .cohort import StudySettings, cohort_task, rows_of, teacher_rng
 
 __all__ = ["TracedRun", "teach_policy"]
 
@@ -104,13 +104,13 @@ def teach_policy(
     from ..teachers.pickplace import PickPlaceTeacher
 
     policy = POLICIES[policy] if isinstance(policy, str) else policy
-    traits = policy.traits(population.sample(_rng(seed, EXPERIMENT, teacher, 0)))
-    task = _task("pickplace", settings)
+    traits = policy.traits(population.sample(teacher_rng(seed, EXPERIMENT, teacher, 0)))
+    task = cohort_task("pickplace", settings)
     model = PickPlaceTeacher(traits, task)
     trait_cols = {f"trait_{k}": v for k, v in traits.to_dict().items() if k != "plan_focus"}
     rows, curve = [], []
     for number in range(1, runs + 1):
-        rng = _rng(seed, EXPERIMENT, teacher, number)
+        rng = teacher_rng(seed, EXPERIMENT, teacher, number)
         started = time.perf_counter()
         run = model.teach(policy.condition, rng, run=_new_run(policy, task, rng))
         compute = time.perf_counter() - started
@@ -137,7 +137,7 @@ def teach_policy(
     return rows, curve
 
 
-def _job(job):
+def arm_job(job):
     """One unit of work in a worker: (variant, seed, teacher, policy, runs, settings)."""
     variant, seed, teacher, policy, runs, settings = job
     population = DEFAULT_POPULATION if variant == DEFAULT_VARIANT else VARIANTS[variant]

@@ -2,8 +2,8 @@
 
 A trainee's run may be saved twice (the tutor's ``NF-2.json`` beside ``NF.json``, a copy
 handed in again, a run begun again in the same folder); two trainees in different
-folders may type the same name. :func:`_duplicates` finds which file of each run is
-counted and which names clash; :func:`_apart` keys a clashing trainee by their folder.
+folders may type the same name. :func:`duplicate_runs` finds which file of each run is
+counted and which names clash; :func:`runs_apart` keys a clashing trainee by their folder.
 They are :mod:`.classroom`'s own helpers.
 """
 
@@ -25,7 +25,7 @@ def _best(members):
     return max(members, key=lambda m: (m[1].finished, m[1].latest, -len(m[0].file)))
 
 
-def _duplicates(outcomes) -> tuple[dict[str, tuple[str, str]], set[str]]:
+def duplicate_runs(outcomes) -> tuple[dict[str, tuple[str, str]], set[str]]:
     """(label -> (the label counted instead, why), trainee keys whose name clashes).
 
     Files are copies of one run only when they share a run id (old records without one:
@@ -61,7 +61,7 @@ def _duplicates(outcomes) -> tuple[dict[str, tuple[str, str]], set[str]]:
     return beaten, clashes
 
 
-def _apart(outcome: FileOutcome, clashes: set[str]) -> FileOutcome:
+def runs_apart(outcome: FileOutcome, clashes: set[str]) -> FileOutcome:
     """A file of a clashing name, keyed by name and folder (a trainee of its own)."""
     if outcome.trainee_key not in clashes:
         return outcome

@@ -37,7 +37,7 @@ from ..framework.protocol import EXPERIMENTS
 from ..framework.wording import NOT_A_NUMBER, plural, sentence
 from . import stats
 from .class_result import ClassResult
-from .report import _jsonable, check_out_dir, load_result, pct, test_lines
+from .report import check_out_dir, jsonable, load_result, pct, test_lines
 from .tables import has_no_number, readable_label, readable_table
 
 __all__ = [
@@ -245,7 +245,7 @@ def analyse_class(result: ClassResult, seed: int = 0) -> dict:
 # ---------------------------------------------------------------- the report
 
 
-def _test_lines(tests: dict, experiment: int, who: str) -> list[str]:
+def tested_lines(tests: dict, experiment: int, who: str) -> list[str]:
     if not tests["tested"]:
         return [f"{who}: no test — {tests['why_not']}"]
     lines = test_lines(tests["stats"], experiment, who)
@@ -309,8 +309,8 @@ def format_class_report(result: ClassResult, analysis: dict) -> str:
         if has_no_number(beside) or has_no_number(descriptive):
             lines.append(f"({BESIDE_LEGEND})")
         lines.append("")
-        lines += _test_lines(analysis["class"], exp, "This class")
-        lines += _test_lines(analysis["simulated"], exp, "Simulated, same size")
+        lines += tested_lines(analysis["class"], exp, "This class")
+        lines += tested_lines(analysis["simulated"], exp, "Simulated, same size")
         lines += beyond_lines(analysis["beyond"])
         if stats.ANALYSES[exp].failures and analysis["failures"] is not None:
             fail = analysis["failures"]
@@ -376,11 +376,11 @@ def _class_json(result: ClassResult, analysis: dict) -> dict:
         "trainees": trainees,
         "skipped": [f.to_dict() for f in result.not_counted],
         "other_experiment": [f.file for f in result.other_experiment],
-        "beside": _jsonable(analysis["beside"]),
-        "descriptive": _jsonable(analysis["descriptive"]),
-        "failures": None if analysis["failures"] is None else _jsonable(analysis["failures"]),
-        "beyond": _jsonable(analysis["beyond"]),
-        **_jsonable(tests),
+        "beside": jsonable(analysis["beside"]),
+        "descriptive": jsonable(analysis["descriptive"]),
+        "failures": None if analysis["failures"] is None else jsonable(analysis["failures"]),
+        "beyond": jsonable(analysis["beyond"]),
+        **jsonable(tests),
     }
 
 

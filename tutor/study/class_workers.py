@@ -1,9 +1,9 @@
 """Reading the files of a class on several processes: the pool, the progress shown and
 the cache that spares a refresh the files that did not change.
 
-:class:`_Pool` maps a function over worker processes (or here, for one worker) in order,
-:func:`_progress` makes the progress callback (a tqdm bar on stderr, or the caller's own)
-and :class:`_Memo` keeps what :func:`.classroom.read_class` learnt about each file while
+:class:`ReplayPool` maps a function over worker processes (or here, for one worker) in order,
+:func:`progress_bar` makes the progress callback (a tqdm bar on stderr, or the caller's own)
+and :class:`ReadMemo` keeps what :func:`.classroom.read_class` learnt about each file while
 the file's size and modification time stay the same (the dashboard's Refresh). They are
 :mod:`.classroom`'s own helpers.
 """
@@ -18,7 +18,7 @@ from ..runtime import headless
 from ..workers import one_blas_thread, process_pool
 
 
-def _progress(progress):
+def progress_bar(progress):
     """``progress`` checked; gives a function of the number of files that makes the
     progress callback (None for none): a tqdm bar on stderr, or the caller's own."""
     if not (progress is None or isinstance(progress, bool) or callable(progress)):
@@ -53,7 +53,7 @@ class _Bar:
             self.bar.close()
 
 
-class _Memo:
+class ReadMemo:
     """What :func:`read_class` learnt about each file, kept while the file is unchanged."""
 
     def __init__(self, cache, run_files: dict, context):
@@ -87,7 +87,7 @@ class _Memo:
 
 
 
-class _Pool:
+class ReplayPool:
     """``map`` over worker processes (or here, for one worker), results in order."""
 
     def __init__(self, workers: int):

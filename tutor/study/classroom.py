@@ -54,27 +54,18 @@ from ..framework.protocol import EXPERIMENTS
 from ..framework.record import RunRecord
 from ..framework.wording import sentence
 from ..tasks import run_class
-from .class_copies import _apart, _duplicates
+from .class_copies import duplicate_runs, runs_apart
 from .class_files import ZIP_AGAIN, close_zips, hidden, list_class, read_run_file
 from .class_result import PROBLEMS, ClassResult, FileOutcome
-from .class_workers import _Memo, _Pool, _progress
-from .cohort import StudySettings, _task, rows_of
+from .class_workers import ReadMemo, ReplayPool, progress_bar
+from .cohort import StudySettings, cohort_task, rows_of
 
 __all__ = [
     "ClassResult",
     "FileOutcome",
-    "RUN_CLASSES",
     "read_class",
     "PROBLEMS",
 ]
-
-
-def _run_class(experiment: int):
-    return run_class(EXPERIMENTS[experiment].task)
-
-
-#: experiment -> a function giving its TeachingRun subclass (imported on first use)
-RUN_CLASSES = {1: lambda: _run_class(1), 2: lambda: _run_class(2)}
 
 
 # ---------------------------------------------------------------- finding the files
@@ -198,7 +189,7 @@ def _replay(item):
     label, record, experiment, settings = item
     spec = EXPERIMENTS[experiment]
     try:
-        run = RUN_CLASSES[experiment]().from_record(_task(spec.task, settings), record)
+        run = run_class(spec.task).from_record(cohort_task(spec.task, settings), record)
     except LimitError as exc:  # too many demos to replay: said before any is
         return label, "cannot be replayed", f"{sentence(exc)} {ASK_AGAIN}", None, []
     except TutorError as exc:
@@ -293,7 +284,7 @@ def read_class(
         isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
     ):
         raise InvalidParameterError(f"workers must be a whole number >= 1, got {workers!r}")
-    step = _progress(progress)
+    step = progress_bar(progress)
     settings = StudySettings() if settings is None else settings
     path = Path(source)
     if not path.is_dir() and not (path.is_file() and zipfile.is_zipfile(path)):
@@ -312,9 +303,9 @@ def read_class(
     workers = min(os.cpu_count() or 1, max(1, len(labels))) if workers is None else workers
     roster = _roster(path, plan, experiment)
     context = (str(path.resolve()), experiment, settings)  # a cache is for one class
-    memo = _Memo(None if path.is_file() else cache, run_files, context)
+    memo = ReadMemo(None if path.is_file() else cache, run_files, context)
     try:
-        with _Pool(workers) as pool:
+        with ReplayPool(workers) as pool:
             fresh = memo.todo(labels, "file")
             items = [(str(path), run_files[lab], lab, experiment, settings) for lab in fresh]
             done = pool.map(_read, items, meanwhile, step(len(items)))
@@ -346,7 +337,7 @@ def _roster(path: Path, plan, experiment: int) -> dict:
 
 
 def _score(path: Path, experiment: int, outcomes, settings) -> ClassResult:
-    beaten, clashes = _duplicates(outcomes)
+    beaten, clashes = duplicate_runs(outcomes)
     files, rows, demo_rows = [], [], []
     old_runs = sum(1 for o, meta, _ in outcomes if meta is not None and meta.run_id is None)
     for outcome, meta, replayed in outcomes:
@@ -357,7 +348,7 @@ def _score(path: Path, experiment: int, outcomes, settings) -> ClassResult:
                 kind="duplicate",
                 reason=f"{instead} {why} ({meta.label} of {meta.name}); that file is counted",
             )
-        outcome = _apart(outcome, clashes)
+        outcome = runs_apart(outcome, clashes)
         if outcome.counted:
             kind, reason, row, extra = replayed
             if kind != "counted":

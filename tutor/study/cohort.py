@@ -204,7 +204,7 @@ def check_request(experiment, n=None, seed=0, conditions=None) -> tuple[int, int
     return int(experiment), int(n), int(seed)
 
 
-def _rng(seed: int, experiment: int, teacher: int, stream: int) -> np.random.Generator:
+def teacher_rng(seed: int, experiment: int, teacher: int, stream: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([seed, experiment, teacher, stream]))
 
 
@@ -213,7 +213,7 @@ def _rng(seed: int, experiment: int, teacher: int, stream: int) -> np.random.Gen
 _TASKS: dict = {}
 
 
-def _task(name: str, settings: StudySettings):
+def cohort_task(name: str, settings: StudySettings):
     key = (name, settings.pickplace_feasibility)
     if key not in _TASKS:
         _TASKS[key] = make_task(name, **settings.task_options(name))
@@ -288,17 +288,17 @@ def teach_runs(
     ``conditions``, by default the paper's four).
     """
     chosen = check_conditions(experiment, conditions)
-    traits = population.sample(_rng(seed, experiment, teacher, 0))
+    traits = population.sample(teacher_rng(seed, experiment, teacher, 0))
     spec = EXPERIMENTS[experiment]
-    model = TEACHERS[spec.task](traits, _task(spec.task, settings))
+    model = TEACHERS[spec.task](traits, cohort_task(spec.task, settings))
     if spec.within_subjects:
         for k, cond in enumerate(chosen, start=1):
-            yield traits, 1, model.teach(cond, _rng(seed, experiment, teacher, k))
+            yield traits, 1, model.teach(cond, teacher_rng(seed, experiment, teacher, k))
     else:
         per = n // len(chosen)
         cond = chosen[teacher // per]
         for k in range(1, spec.runs + 1):
-            yield traits, k, model.teach(cond, _rng(seed, experiment, teacher, k))
+            yield traits, k, model.teach(cond, teacher_rng(seed, experiment, teacher, k))
 
 
 def rows_of(run, base: dict, settings: StudySettings = StudySettings()):

@@ -395,11 +395,11 @@ class ClassDashboard:
         return f"{kind} of the class's η per condition; {measure}: " + "; ".join(parts)
 
     def _tests_html(self) -> str:
-        from .class_report import _test_lines
+        from .class_report import tested_lines
 
         parts = []
         for who, label in (("class", "This class"), ("simulated", "Simulated, same size")):
-            lines = _test_lines(self.analysis[who], self.result.experiment, label)
+            lines = tested_lines(self.analysis[who], self.result.experiment, label)
             if who == "class":  # the conditions beyond the paper, each against its own
                 lines += beyond_lines(self.analysis["beyond"])
             parts.append(  # lines kept as they are, wrapped between words (no <pre>)

@@ -245,12 +245,12 @@ def format_report(result: CohortResult, analysis: dict) -> str:
     return "\n".join(lines)
 
 
-def _jsonable(value):
+def jsonable(value):
     if isinstance(value, pd.DataFrame):
         return json.loads(value.to_json(orient="index"))
     if isinstance(value, dict):
         return {
-            "-".join(k) if isinstance(k, tuple) else str(k): _jsonable(v) for k, v in value.items()
+            "-".join(k) if isinstance(k, tuple) else str(k): jsonable(v) for k, v in value.items()
         }
     if isinstance(value, np.generic):
         return value.item()
@@ -288,8 +288,8 @@ def save_result(result: CohortResult, analysis: dict, out, figures: bool = True)
         "seed": result.seed,
         "n_teachers": int(result.runs.teacher.nunique()),
         "settings": result.settings.__dict__,
-        "paper": _jsonable(stats.ANALYSES[result.experiment].paper),
-        **_jsonable({k: v for k, v in analysis.items()}),
+        "paper": jsonable(stats.ANALYSES[result.experiment].paper),
+        **jsonable({k: v for k, v in analysis.items()}),
     }
     paths["summary"].write_text(json.dumps(summary, indent=2, default=str))
     paths["report"].write_text(format_report(result, analysis) + "\n")

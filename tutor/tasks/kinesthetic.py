@@ -78,7 +78,7 @@ def demonstrate(
     InvalidParameterError
         An unknown plant, mistake or a rate that is not a positive number.
     """
-    target = _check_plant(scene, plant)
+    target = check_plant(scene, plant)
     if mistake is not None and mistake not in MISTAKES:
         raise InvalidParameterError(
             f"unknown mistake {mistake!r}; use None, 'wrong_plant' or 'sloppy_grab'"
@@ -96,10 +96,10 @@ def demonstrate(
     release = scene.release_point + rng.normal(0, PLACEMENT_SD, 3)  # where the hand opens
     reach, carry = _via_points(np.asarray(start, dtype=float), grasp, release, rng)
     t, path, g = _guide(reach, carry, float(rate_hz), rng)
-    return np.column_stack([t, path + _tremor(len(path), rng), g])
+    return np.column_stack([t, path + hand_tremor(len(path), rng), g])
 
 
-def _check_plant(scene: PickPlaceScene, plant) -> int:
+def check_plant(scene: PickPlaceScene, plant) -> int:
     """``plant`` as a plant index of ``scene``, or a named error."""
     n = scene.rows * scene.cols
     if isinstance(plant, bool) or not isinstance(plant, int | np.integer) or not 0 <= plant < n:
@@ -171,7 +171,7 @@ def _guide(reach, carry, rate_hz: float, rng) -> tuple[np.ndarray, np.ndarray, n
     return np.concatenate(times), np.concatenate(points_out), np.concatenate(hands)
 
 
-def _tremor(n: int, rng) -> np.ndarray:
+def hand_tremor(n: int, rng) -> np.ndarray:
     """Hand tremor (n, 3) (m): white noise smoothed over 7 samples."""
     noise = rng.normal(scale=TREMOR_SD, size=(n, 3))
     kernel = np.hanning(7) / np.hanning(7).sum()

@@ -563,7 +563,7 @@ class PickPlaceRun(TeachingRun):
         )
         return super().undo(spent_seconds=spent)
 
-    def _check_plant(self, plant) -> int:
+    def check_plant(self, plant) -> int:
         n = len(self.task.conditions)
         if isinstance(plant, bool):
             raise InvalidParameterError(f"a plant is a number from 0 to {n - 1}, got {plant!r}")

@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import InvalidParameterError, InvalidRecordingError
 from ..limits import MAX_RECORDING_SAMPLES, MAX_RECORDING_SECONDS
 from ..robot.follow import REACH_CENTER, REACH_RADIUS, guide_limits
-from .kinesthetic import _check_plant, _tremor
+from .kinesthetic import check_plant, hand_tremor
 from .pickplace import GRAB_LEVEL, load_scene
 
 __all__ = [
@@ -239,7 +239,7 @@ def steady_hand(task, plant, rng=None, rate_hz: float = 40.0) -> np.ndarray:
         :func:`check_recording` accepts.
     """
     scene = task.scene
-    plant = _check_plant(scene, plant)
+    plant = check_plant(scene, plant)
     try:
         rate = float(rate_hz)
         ok = np.isfinite(rate) and 1.0 <= rate <= 1000.0
@@ -269,7 +269,7 @@ def steady_hand(task, plant, rng=None, rate_hz: float = 40.0) -> np.ndarray:
     knots, grip_at = _timeline(start, moves, fitts, rng)
     t = np.arange(0.0, knots[-1][0] + 0.5 / rate, 1.0 / rate)
     xyz = _sample(knots, t)
-    xyz += _tremor(len(t), rng)
+    xyz += hand_tremor(len(t), rng)
     g = ((t >= grip_at["close"]) & (t < grip_at["open"])).astype(float)
     floor = guide_limits(scene)["z"][0]
     xyz[:, 2] = np.maximum(xyz[:, 2], floor)  # the handle never goes below the table top
