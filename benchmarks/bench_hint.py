@@ -35,7 +35,7 @@ def run(task, sets: int = 5, repeats: int = 3, steps=STEPS) -> dict:
     times: dict[int, list[float]] = {m: [] for m in steps}
     for k in range(sets):
         rng = np.random.default_rng([7, k])
-        plants = rng.choice(len(task.conditions), max(steps), replace=False)
+        plants = rng.choice(len(task.test_points), max(steps), replace=False)
         run_ = PickPlaceRun("HF", task)
         for m in range(max(steps) + 1):
             if m in times:

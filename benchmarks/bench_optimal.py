@@ -38,7 +38,7 @@ def run(task, repeats: int, workers: int) -> dict:
     steps = {}
     with optimal.Scorer(task, hint, workers) as scorer:
         for m, p in enumerate(found.positions[:2], start=1):
-            state = state.added(task, bank.demos[p], bank.conditions[p])[0]
+            state = state.added(task, bank.demos[p], bank.demo_points[p])[0]
             times = []
             for _ in range(repeats):
                 t0 = time.perf_counter()

@@ -41,12 +41,12 @@ def contexts(task, m: int, n_sets: int, seed: int):
             for start in starts:
                 session.add_demo(task.layout.reference_path(start, rng, jitter=0.004))
         else:
-            plants = rng.choice(len(task.conditions), size=m, replace=False)
+            plants = rng.choice(len(task.test_points), size=m, replace=False)
             for p in plants:
-                session.add_demo(task.demonstrate(int(p), rng), condition=task.conditions[p])
+                session.add_demo(task.demonstrate(int(p), rng), point=task.test_points[p])
         out.append(
             SelectionContext.of_task(
-                task, session.conditions, session.learner,
+                task, session.demo_points, session.learner,
                 realisations=session.realisations, passed=session.latest.passed,
                 rng=np.random.default_rng(s),
             )

@@ -95,7 +95,7 @@ def run_recorded(repeats: int = 9, n_sets: int = 5, steps=(5, 10, 20)) -> dict:
 
 def run_pickplace(repeats: int = 9, n_sets: int = 3, steps=(5, 10, 20)) -> dict:
     task = PickPlaceTask()
-    conditions, times = task.conditions, task.times
+    conditions, times = task.test_points, task.times
     batch = task.frame_batch(conditions)
     out = {}
     for m in steps:
@@ -106,15 +106,15 @@ def run_pickplace(repeats: int = 9, n_sets: int = 3, steps=(5, 10, 20)) -> dict:
             raws = [task.demonstrate(int(p), rng) for p in plants]
             session = TeachingSession(task)
             for p, raw in zip(plants[:-1], raws[:-1], strict=True):
-                session.add_demo(raw, condition=conditions[p])
+                session.add_demo(raw, point=conditions[p])
             for _ in range(repeats):
                 trial = copy.deepcopy(session)
                 t0 = time.perf_counter()
-                trial.add_demo(raws[-1], condition=conditions[plants[-1]])
+                trial.add_demo(raws[-1], point=conditions[plants[-1]])
                 step_times.append(time.perf_counter() - t0)
             learner = trial.learner
             demos = trial.demos
-            conds = np.array(trial.conditions)
+            conds = np.array(trial.demo_points)
 
             def judge_all(learner=learner, demos=demos, conds=conds):
                 context = task.criteria_context(demos, conds)

@@ -52,7 +52,7 @@ def main() -> None:
             task="pickplace",
             columns=COLUMNS,
             description=description,
-            conditions=task.conditions[chosen],  # the plant the teacher meant
+            points=task.test_points[chosen],  # the plant the teacher meant
         )
         print(f"wrote {path} ({len(demos)} demos)")
 

@@ -71,11 +71,11 @@ def test_conditions_round_trip_and_bad_conditions(tmp_path):
         demos,
         task="pickplace",
         columns="txyzg",
-        conditions=[[0.1, 0.2, 0.3], None],
+        points=[[0.1, 0.2, 0.3], None],
     )
     ds = load_demos(path)
-    np.testing.assert_allclose(ds.conditions[0], [0.1, 0.2, 0.3])
-    assert ds.conditions[1] is None
+    np.testing.assert_allclose(ds.demo_points[0], [0.1, 0.2, 0.3])
+    assert ds.demo_points[1] is None
     data = json.loads(path.read_text())
     data["conditions"][0] = "plant 7"
     path.write_text(json.dumps(data))

@@ -185,7 +185,7 @@ def test_a_condition_that_is_not_a_list_of_numbers_is_refused(tmp_path, conditio
 def test_conditions_given_or_null_are_kept(tmp_path):
     text = demo_json(demos=[[[0, 1, 2], [1, 2, 3]]] * 2, conditions=[[0.3, 0.1], None])
     loaded = load_demos(write(tmp_path, "d.json", text))
-    assert loaded.conditions[0].tolist() == [0.3, 0.1] and loaded.conditions[1] is None
+    assert loaded.demo_points[0].tolist() == [0.3, 0.1] and loaded.demo_points[1] is None
 
 
 def test_a_missing_version_is_version_1(tmp_path):

@@ -88,7 +88,7 @@ def test_a_scripted_series_never_contradicts_itself(maze_task):
         rec = app.session.latest
         text = " ".join(lines)
         assert re.search(r"at sample \d", text) is None  # no sample numbers
-        assert "test condition" not in text
+        assert "test point" not in text
         if "does not do the task" in text:
             # the demo's own failure comes with one next step: undo it, nothing else
             assert "demonstrate there next" not in text and "you may finish" not in text

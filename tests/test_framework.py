@@ -252,7 +252,7 @@ def test_feedback_modes_choose_r(maze_task):
     assert batch.shown.tolist() == [0, 19, 139]
     replay = TeachingSession(maze_task, feedback="replay").add_demo(demo)
     assert replay.shown.size == 1
-    assert np.linalg.norm(maze_task.conditions[replay.shown[0]] - [0.03, 0.03]) < 0.01
+    assert np.linalg.norm(maze_task.test_points[replay.shown[0]] - [0.03, 0.03]) < 0.01
     sel = TeachingSession(maze_task, feedback="selected").add_demo(demo, shown=[5, 6])
     assert sel.shown.tolist() == [5, 6]
     with pytest.raises(InvalidParameterError):
@@ -363,23 +363,23 @@ def test_saving_over_a_run_replaces_it_whole(maze_task, tmp_path):
     assert RunRecord.from_dict(saved) == run.record
 
 
-def test_explicit_condition_is_kept_and_round_trips(maze_task, tmp_path):
+def test_explicit_test_point_is_kept_and_round_trips(maze_task, tmp_path):
     s = TeachingSession(maze_task)
     demo = demo_from(maze_task, (0.03, 0.03))
-    s.add_demo(demo, condition=[0.031, 0.029])
-    np.testing.assert_allclose(s.conditions[0], [0.031, 0.029])
-    with pytest.raises(InvalidParameterError, match="condition"):
-        s.add_demo(demo, condition=[0.1, 0.2, 0.3])
-    with pytest.raises(InvalidParameterError, match="condition"):
-        s.add_demo(demo, condition=[np.nan, 0.2])
+    s.add_demo(demo, point=[0.031, 0.029])
+    np.testing.assert_allclose(s.demo_points[0], [0.031, 0.029])
+    with pytest.raises(InvalidParameterError, match="point must be"):
+        s.add_demo(demo, point=[0.1, 0.2, 0.3])
+    with pytest.raises(InvalidParameterError, match="point must be"):
+        s.add_demo(demo, point=[np.nan, 0.2])
     assert s.n_demos == 1
     run = MazeRun.new("VF", maze_task)
-    run.add_demo(demo, condition=[0.031, 0.029])
-    with pytest.raises(InvalidParameterError, match="condition"):
-        run.add_demo(demo, condition=[np.nan, 0.2])
-    assert run.attempt.demos[0].condition == (0.031, 0.029) and run.n_demos == 1
+    run.add_demo(demo, point=[0.031, 0.029])
+    with pytest.raises(InvalidParameterError, match="point must be"):
+        run.add_demo(demo, point=[np.nan, 0.2])
+    assert run.attempt.demos[0].point == (0.031, 0.029) and run.n_demos == 1
     loaded = MazeRun.load(run.save(tmp_path / "s.json"), maze_task)
-    np.testing.assert_allclose(loaded.session.conditions[0], [0.031, 0.029])
+    np.testing.assert_allclose(loaded.session.demo_points[0], [0.031, 0.029])
     assert loaded.session.latest.efficacy == s.latest.efficacy == run.session.latest.efficacy
 
 

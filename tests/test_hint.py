@@ -66,7 +66,7 @@ def test_with_no_demo_the_hint_is_the_optimal_teachers_first_pick(pickplace_task
     assert isinstance(hint, Hint)
     assert hint.plant == reference.picks[0] and hint.efficacy == reference.greedy[0]
     assert hint.seconds < 0.05  # read, not computed
-    assert reference.n_conditions == len(pickplace_task.conditions)
+    assert reference.n_conditions == len(pickplace_task.test_points)
 
 
 def test_after_demos_the_hint_is_the_best_of_the_pruned_candidates(pickplace_task):
@@ -82,7 +82,7 @@ def test_after_demos_the_hint_is_the_best_of_the_pruned_candidates(pickplace_tas
     assert (hint.plant, hint.efficacy) == (best.index, best.efficacy)
     # the efficacy is the session's own once that careful demo is given
     run.add_demo(
-        hint_bank(pickplace_task).demos[hint.plant], condition=pickplace_task.conditions[hint.plant]
+        hint_bank(pickplace_task).demos[hint.plant], point=pickplace_task.test_points[hint.plant]
     )
     assert run.session.latest.efficacy == pytest.approx(hint.efficacy, abs=1e-12)
 
@@ -112,7 +112,7 @@ def test_the_hint_is_cached_and_undo_and_reset_invalidate_it(pickplace_task):
 def test_the_bank_is_one_careful_demo_per_plant_made_once(pickplace_task):
     bank = hint_bank(pickplace_task)
     assert hint_bank(pickplace_task) is bank
-    assert bank.index.tolist() == list(range(len(pickplace_task.conditions)))
+    assert bank.index.tolist() == list(range(len(pickplace_task.test_points)))
     assert set(bank.draw.tolist()) == {0}
 
 

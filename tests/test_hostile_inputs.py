@@ -693,27 +693,27 @@ LOADS = [
      r"experiment 2.*experiment 1|experiment 1.*experiment 2", r"matching tutor"),
     # --- pick-and-place loads
     ("pp-malformed-condition-row", "pp", {}, "rows.json",
-     writes(lambda w: pp_file(w, [w.pp_raw[0], w.pp_raw[10]], [w.pp_task.conditions[0],
+     writes(lambda w: pp_file(w, [w.pp_raw[0], w.pp_raw[10]], [w.pp_task.test_points[0],
                                                                [0.34, -0.2]])),
      r"demo 2|condition 2", r"3 numbers|x, y, z|three|shape \(3,\)"),
     ("pp-condition-row-that-is-text", "pp", {}, "text.json",
-     writes(lambda w: pp_file(w, [w.pp_raw[0], w.pp_raw[10]], [w.pp_task.conditions[0],
+     writes(lambda w: pp_file(w, [w.pp_raw[0], w.pp_raw[10]], [w.pp_task.test_points[0],
                                                                None]) | {
-         "conditions": [w.pp_task.conditions[0].tolist(), "plant 3"]}),
+         "conditions": [w.pp_task.test_points[0].tolist(), "plant 3"]}),
      r"condition 2", r"list of numbers|null"),
     ("pp-far-away-condition", "pp", {}, "far.json",
-     writes(lambda w: pp_file(w, [w.pp_raw[0], w.pp_raw[10]], [w.pp_task.conditions[0],
+     writes(lambda w: pp_file(w, [w.pp_raw[0], w.pp_raw[10]], [w.pp_task.test_points[0],
                                                                [5.0, 5.0, 5.0]])),
      r"demo 2.*cm from the nearest plant", r"metres|half a plant"),
     ("pp-condition-far-above-a-plant", "pp", {}, "high.json",
      writes(lambda w: pp_file(w, [w.pp_raw[0], w.pp_raw[10]], [
-         w.pp_task.conditions[0], [*w.pp_task.conditions[10][:2], 2.0]])),
+         w.pp_task.test_points[0], [*w.pp_task.test_points[10][:2], 2.0]])),
      r"demo 2.*(cm|far|above|height)", r"metres|plant"),
     ("pp-positions-in-centimetres", "pp", {}, "cm.json",
      writes(lambda w: pp_file(w, [in_cm(w.pp_raw[10])], [None])), r"centimetres",
      r"divide the positions by 100"),
     ("pp-positions-and-conditions-in-centimetres", "pp", {}, "cm2.json",
-     writes(lambda w: pp_file(w, [in_cm(w.pp_raw[10])], [100 * w.pp_task.conditions[10]])),
+     writes(lambda w: pp_file(w, [in_cm(w.pp_raw[10])], [100 * w.pp_task.test_points[10]])),
      r"centimetres", r"divide .*by 100"),
     ("pp-a-3-column-csv", "pp", {}, "maze.csv", writes(lambda w: csv_of(w.good[1:2])),
      r"no 'z', 'g' column", r"t, x, y, z, g"),
@@ -1131,7 +1131,7 @@ def test_a_bad_tutor_argument_gets_a_named_error_or_a_message(c, make, what, fix
 def fit_tpgmm(w, **params):
     task = w.maze_task
     demos = [task.preprocess(d) for d in w.good[:2]]
-    frames = [task.frames(task.condition_of(d)) for d in demos]
+    frames = [task.frames(task.test_point_of(d)) for d in demos]
     return TPGMM(**params).fit(demos, frames)
 
 
@@ -1204,9 +1204,9 @@ LIBRARY = [
      InvalidDemoError, r"not a numeric table|2-d", r"array of shape|\(T"),
     ("add_demo-a-dict", lambda c: TeachingSession(c.w.maze_task).add_demo({"t": [0, 1]}),
      InvalidDemoError, r"not a numeric table|2-d", r"array of shape|\(T"),
-    ("add_demo-condition-of-text",
-     lambda c: TeachingSession(c.w.maze_task).add_demo(c.w.good[0], condition="start"),
-     InvalidParameterError, r"condition", r"shape|finite array"),
+    ("add_demo-point-of-text",
+     lambda c: TeachingSession(c.w.maze_task).add_demo(c.w.good[0], point="start"),
+     InvalidParameterError, r"point", r"shape|finite array"),
     ("spend-negative-seconds",
      lambda c: PickPlaceRun("BF", task=c.w.pp_task).spend(-5), InvalidParameterError,
      r"got -5", r">= 0"),

@@ -29,23 +29,23 @@ def test_geometry_matches_the_paper(maze_task):
     assert (zone.x1 - zone.x0, zone.y1 - zone.y0) == pytest.approx((0.20, 0.06))
     assert lay.target_diameter == pytest.approx(0.005)
     assert len(lay.obstacles) == 2
-    assert maze_task.conditions.shape == (140, 2)
-    assert np.all(zone.contains(maze_task.conditions))
+    assert maze_task.test_points.shape == (140, 2)
+    assert np.all(zone.contains(maze_task.test_points))
     assert (
-        len(np.unique(maze_task.conditions[:, 0])) == 20
-        and len(np.unique(maze_task.conditions[:, 1])) == 7
+        len(np.unique(maze_task.test_points[:, 0])) == 20
+        and len(np.unique(maze_task.test_points[:, 1])) == 7
     )
     assert lay.n_components == 11
-    frames = maze_task.frames(maze_task.conditions[0])
+    frames = maze_task.frames(maze_task.test_points[0])
     assert len(frames) == 4
-    np.testing.assert_allclose(frames[0].b, maze_task.conditions[0])
+    np.testing.assert_allclose(frames[0].b, maze_task.test_points[0])
     np.testing.assert_allclose(frames[1].b, lay.target_center)
 
 
 def test_frame_batch_equals_frames(maze_task):
-    batch = maze_task.frame_batch(maze_task.conditions)
+    batch = maze_task.frame_batch(maze_task.test_points)
     for i in (0, 77, 139):
-        for j, f in enumerate(maze_task.frames(maze_task.conditions[i])):
+        for j, f in enumerate(maze_task.frames(maze_task.test_points[i])):
             np.testing.assert_allclose(batch.b[i, j], f.b)
             np.testing.assert_allclose(batch.A[i, j], f.A)
 
@@ -125,7 +125,7 @@ def test_preprocess_rejects_junk_with_a_reason(maze_task, make, words):
 
 
 def test_demonstrated_covers_the_nearest_grid_points(maze_task):
-    c = maze_task.conditions
+    c = maze_task.test_points
     on_point = maze_task.demonstrated(c[[5]])
     assert on_point.sum() == 1 and on_point[5]
     assert maze_task.demonstrated(np.empty((0, 2))).sum() == 0
@@ -134,7 +134,7 @@ def test_demonstrated_covers_the_nearest_grid_points(maze_task):
 
 
 def test_describe_where(maze_task):
-    c = maze_task.conditions
+    c = maze_task.test_points
     left_bottom = (c[:, 0] < 0.06) & (c[:, 1] < 0.02)
     assert maze_task.describe_where(left_bottom) == "mostly bottom left of the start zone"
     assert maze_task.describe_where(c[:, 0] > 0.14) == "mostly right of the start zone"
@@ -172,8 +172,8 @@ def test_a_guided_teacher_needs_three_demos_and_never_loses_ground(maze_task):
             best = max(best, r.efficacy)
             if r.efficacy >= 0.9:
                 break
-            fail = maze_task.conditions[~r.passed]
-            starts = np.array([maze_task.condition_of(d) for d in s.demos])
+            fail = maze_task.test_points[~r.passed]
+            starts = np.array([maze_task.test_point_of(d) for d in s.demos])
             far = np.linalg.norm(fail[:, None] - starts[None], axis=2).min(axis=1)
             start = np.clip(fail[np.argmax(far)] + rng.normal(0, 0.003, 2), 0.003, [0.197, 0.057])
         needed.append(s.n_demos if r.efficacy >= 0.9 else 99)

@@ -24,7 +24,7 @@ def test_rule_two_centres_on_the_first_start(maze_task):
 
 
 def test_rule_three_marks_a_green_start_next_to_the_most_red(maze_task):
-    starts = maze_task.conditions
+    starts = maze_task.test_points
     first = np.array([0.03, 0.03])
     passed = starts[:, 0] < 0.12  # left green, right red
     advice = advise_from(maze_task, passed, first)
@@ -39,7 +39,7 @@ def test_rule_three_marks_a_green_start_next_to_the_most_red(maze_task):
 
 
 def test_rule_two_until_the_first_start_is_surrounded(maze_task):
-    starts = maze_task.conditions
+    starts = maze_task.test_points
     passed = np.ones(len(starts), bool)
     passed[np.argmin(np.linalg.norm(starts - (0.05, 0.03), axis=1))] = False  # one red nearby
     assert advise_from(maze_task, passed, (0.03, 0.03)).rule == 2

@@ -37,8 +37,8 @@ class Corner(MazeTask):
 
     def __init__(self, keep):
         super().__init__()
-        self._conditions = self._conditions[np.asarray(keep)]
-        self._batch = self.layout.frame_batch(self._conditions)
+        self._test_points = self._test_points[np.asarray(keep)]
+        self._batch = self.layout.frame_batch(self._test_points)
 
 
 # ---------------------------------------------------------------- the fast parts are exact
@@ -47,19 +47,20 @@ class Corner(MazeTask):
 @pytest.mark.parametrize("name", ["maze_task", "pickplace_task"])
 def test_realisation_and_fast_judging_equal_the_sessions(name, request):
     task = request.getfixturevalue(name)
-    bank = optimal.make_bank(task, 1, indices=[0, len(task.conditions) - 1, 7])
+    bank = optimal.make_bank(task, 1, indices=[0, len(task.test_points) - 1, 7])
     state = optimal.State.empty(task)
     session = TeachingSession(task, feedback="none")
-    for demo, cond in zip(bank.demos, bank.conditions, strict=True):
+    for demo, cond in zip(bank.demos, bank.demo_points, strict=True):
         state, eps, passed = state.added(task, demo, cond)
-        record = session.add_demo(demo, condition=cond)
+        record = session.add_demo(demo, point=cond)
         learner = state.learner
-        batch = task.frame_batch(task.conditions)
+        batch = task.frame_batch(task.test_points)
         plain = learner.reproduce_batch(batch, task.times)[0]
         assert np.array_equal(optimal.realise(task, learner), plain)
-        context = task.criteria_context(state.demos, np.array(state.conditions))
+        context = task.criteria_context(state.demos, np.array(state.demo_points))
         np.testing.assert_array_equal(
-            optimal.judged(task, plain, context), task.judge(plain, task.conditions, context).passed
+            optimal.judged(task, plain, context),
+            task.judge(plain, task.test_points, context).passed,
         )
         assert eps == record.efficacy
         np.testing.assert_array_equal(passed, record.passed)
@@ -81,7 +82,7 @@ def test_the_bank_is_careful_demos_seeded_per_condition(maze_task):
     )
     np.testing.assert_array_equal(full.demos[1], part.demos[0])
     assert not np.array_equal(full.demos[1], full.demos[3])  # another draw of the hand
-    for demo, cond in zip(full.demos, full.conditions, strict=True):
+    for demo, cond in zip(full.demos, full.demo_points, strict=True):
         assert maze_task.judge_demo(demo, cond).passed[0]
     assert len(full.first_draws(1)) == 2
 
@@ -105,7 +106,7 @@ def tiny(maze_task):
     demos = np.concatenate([others.demos[:1], path.demos, others.demos[1:]])
     return optimal.Bank(
         demos,
-        np.concatenate([others.conditions[:1], path.conditions, others.conditions[1:]]),
+        np.concatenate([others.demo_points[:1], path.demo_points, others.demo_points[1:]]),
         np.concatenate([others.index[:1], path.index, others.index[1:]]),
         np.concatenate([others.draw[:1], path.draw, others.draw[1:]]),
     )
@@ -117,7 +118,7 @@ def test_greedy_on_a_tiny_bank_reaches_the_known_optimum(maze_task, tiny):
     empty = optimal.State.empty(maze_task)
     singles = [
         optimal.efficacy_after(maze_task, empty, d, c)[0]
-        for d, c in zip(tiny.demos, tiny.conditions, strict=True)
+        for d, c in zip(tiny.demos, tiny.demo_points, strict=True)
     ]
     assert found.best_single == max(singles) == found.efficacies[0]
     assert found.positions[0] == int(np.argmax(singles))  # ties: the first
@@ -136,7 +137,7 @@ def test_the_pair_bound_finds_a_pair_that_suffices(maze_task, tiny):
     """On a B^ of the start points the first two greedy demos win, that pair reaches 1."""
     state = optimal.State.empty(maze_task)
     for p in (1, 2):
-        state, _, passed = state.added(maze_task, tiny.demos[p], tiny.conditions[p])
+        state, _, passed = state.added(maze_task, tiny.demos[p], tiny.demo_points[p])
     keep = np.flatnonzero(passed)
     task = Corner(keep)
     pairs = optimal.pair_bound(task, tiny, workers=1)
@@ -148,18 +149,18 @@ def test_the_pair_bound_finds_a_pair_that_suffices(maze_task, tiny):
 
 def test_best_next_is_the_greedy_step_of_a_session_with_ties_to_the_first(maze_task, tiny):
     session = TeachingSession(maze_task, feedback="all")
-    session.add_demo(tiny.demos[1], condition=tiny.conditions[1])
+    session.add_demo(tiny.demos[1], point=tiny.demo_points[1])
     doubled = tiny.subset([0, 2, 2, 3])  # the same demo twice: a tie
     choice = optimal.best_next(maze_task, session, doubled, workers=1)
     assert choice.position == 1 and choice.index == int(tiny.index[2])
     state = optimal.State.from_session(session)
     scores = [
         optimal.efficacy_after(maze_task, state, d, c)[0]
-        for d, c in zip(doubled.demos, doubled.conditions, strict=True)
+        for d, c in zip(doubled.demos, doubled.demo_points, strict=True)
     ]
     assert choice.efficacy == max(scores)
     assert (
-        session.add_demo(doubled.demos[1], condition=doubled.conditions[1]).efficacy
+        session.add_demo(doubled.demos[1], point=doubled.demo_points[1]).efficacy
         == choice.efficacy
     )
     only = optimal.best_next(maze_task, state, doubled, candidates=[0, 3], workers=1)
@@ -210,8 +211,8 @@ def test_the_bundled_numbers_replay_in_a_session(name, maze_task, pickplace_task
     bank = _path_bank(task, name)
     session = TeachingSession(task, feedback="none")
     got = [
-        session.add_demo(d, condition=c).efficacy
-        for d, c in zip(bank.demos, bank.conditions, strict=True)
+        session.add_demo(d, point=c).efficacy
+        for d, c in zip(bank.demos, bank.demo_points, strict=True)
     ]
     assert got == pytest.approx(entry["greedy"]["efficacy"], abs=1e-6)
     assert entry["greedy"]["session_efficacy"] == entry["greedy"]["efficacy"]
@@ -219,7 +220,7 @@ def test_the_bundled_numbers_replay_in_a_session(name, maze_task, pickplace_task
     pair = optimal.make_bank(task, 1, BUNDLED["settings"]["seed"], [first, second])
     order = [0, 1] if first != second else [0, 0]
     session = TeachingSession(task, feedback="none")
-    eps = [session.add_demo(pair.demos[k], condition=pair.conditions[k]).efficacy for k in order]
+    eps = [session.add_demo(pair.demos[k], point=pair.demo_points[k]).efficacy for k in order]
     assert eps == pytest.approx(entry["pairs"]["best_path"], abs=1e-6)
 
 
@@ -322,13 +323,13 @@ def test_the_lookahead_below_the_views_hints_from_a_run(pickplace_task):
     run = PickPlaceRun.new("BF", pickplace_task)
     run.demonstrate(0, rng=np.random.default_rng(1))
     bank = lookahead.make_bank(pickplace_task, 1, indices=[0, 4, 76, 99])
-    for demo, cond in zip(bank.demos, bank.conditions, strict=True):
+    for demo, cond in zip(bank.demos, bank.demo_points, strict=True):
         assert pickplace_task.judge_demo(demo, cond).passed[0]
     hint = lookahead.best_next(pickplace_task, run, bank, workers=1)
     state = lookahead.State.from_session(run)
     assert len(state.demos) == 1
     scores = [
         lookahead.efficacy_after(pickplace_task, state, d, c)[0]
-        for d, c in zip(bank.demos, bank.conditions, strict=True)
+        for d, c in zip(bank.demos, bank.demo_points, strict=True)
     ]
     assert hint.efficacy == max(scores) and hint.index == int(bank.index[np.argmax(scores)])

@@ -12,7 +12,7 @@ from tutor.tasks.pickplace import PickPlaceTask
 
 def carry(task, plant, grab_offset=(0, 0, 0), release_offset=(0, 0, 0), n=200, dip=None):
     """A hand-made (T, 4) trajectory: start -> plant (close) -> release point (open)."""
-    plant_pos = task.conditions[plant] + np.asarray(grab_offset)
+    plant_pos = task.test_points[plant] + np.asarray(grab_offset)
     rel = task.scene.release_point + np.asarray(release_offset)
     third = n // 3
     a = np.linspace(task.start, plant_pos, third)
@@ -30,15 +30,15 @@ def as_demo(traj):
 
 
 def test_scene_matches_the_paper(pickplace_task):
-    assert pickplace_task.conditions.shape == (100, 3)
+    assert pickplace_task.test_points.shape == (100, 3)
     sc = pickplace_task.scene
     assert (sc.rows, sc.cols) == (10, 10)
-    corners = pickplace_task.conditions[sc.generalisation_indices]
+    corners = pickplace_task.test_points[sc.generalisation_indices]
     assert len(corners) == 5
-    np.testing.assert_allclose(corners[-1, :2], pickplace_task.conditions[44, :2])
-    assert len(pickplace_task.frames(pickplace_task.conditions[0])) == 3
-    batch = pickplace_task.frame_batch(pickplace_task.conditions)
-    np.testing.assert_allclose(batch.b[7, 1, :3], pickplace_task.conditions[7])
+    np.testing.assert_allclose(corners[-1, :2], pickplace_task.test_points[44, :2])
+    assert len(pickplace_task.frames(pickplace_task.test_points[0])) == 3
+    batch = pickplace_task.frame_batch(pickplace_task.test_points)
+    np.testing.assert_allclose(batch.b[7, 1, :3], pickplace_task.test_points[7])
     np.testing.assert_allclose(batch.b[7, 1, 3], 0.0)  # the hand column is not moved by frames
     assert pickplace_task.start[2] > 0.3  # the start pose is well above the table
 
@@ -54,7 +54,7 @@ def test_start_is_the_tool_at_the_start_configuration(pickplace_task):
 
 def test_a_correct_carry_passes(pickplace_task):
     ctx = {"delta_g": 0.01, "delta_r": 0.01}
-    v = pickplace_task.judge(carry(pickplace_task, 5)[None], pickplace_task.conditions[[5]], ctx)
+    v = pickplace_task.judge(carry(pickplace_task, 5)[None], pickplace_task.test_points[[5]], ctx)
     assert v.passed.tolist() == [True]
 
 
@@ -69,7 +69,7 @@ def test_a_correct_carry_passes(pickplace_task):
 def test_failure_reasons(pickplace_task, kwargs, words):
     ctx = {"delta_g": 0.01, "delta_r": 0.01}
     v = pickplace_task.judge(
-        carry(pickplace_task, 5, **kwargs)[None], pickplace_task.conditions[[5]], ctx
+        carry(pickplace_task, 5, **kwargs)[None], pickplace_task.test_points[[5]], ctx
     )
     assert not v.passed[0] and words in v.reasons[0]
 
@@ -81,12 +81,12 @@ def test_never_closing_or_opening(pickplace_task):
     closed[:, 3] = 0.0
     opened[60:, 3] = 1.0
     assert (
-        pickplace_task.judge(closed[None], pickplace_task.conditions[[5]], ctx).reasons[0]
+        pickplace_task.judge(closed[None], pickplace_task.test_points[[5]], ctx).reasons[0]
         == "never closed the hand"
     )
     assert (
         "never opened the hand"
-        in pickplace_task.judge(opened[None], pickplace_task.conditions[[5]], ctx).reasons[0]
+        in pickplace_task.judge(opened[None], pickplace_task.test_points[[5]], ctx).reasons[0]
     )
 
 
@@ -94,7 +94,7 @@ def test_through_the_tray(pickplace_task):
     t = carry(pickplace_task, 5)
     t[40, :3] = pickplace_task.scene.tray_center  # inside the tray box
     v = pickplace_task.judge(
-        t[None], pickplace_task.conditions[[5]], {"delta_g": 0.01, "delta_r": 0.01}
+        t[None], pickplace_task.test_points[[5]], {"delta_g": 0.01, "delta_r": 0.01}
     )
     assert "hit the tray at sample 41" in v.reasons[0]
 
@@ -105,7 +105,7 @@ def test_delta_rule_is_mean_plus_two_std_plus_one_mm(pickplace_task):
         as_demo(carry(pickplace_task, 5, grab_offset=(o, 0, 0), release_offset=(0, 2 * o, 0)))
         for o in offsets
     ]
-    ctx = pickplace_task.criteria_context(demos, pickplace_task.conditions[[5, 5, 5]])
+    ctx = pickplace_task.criteria_context(demos, pickplace_task.test_points[[5, 5, 5]])
     std = np.std(offsets)  # population standard deviation
     assert ctx["delta_g"] == pytest.approx(0.002 + 2 * std + 0.001)
     assert ctx["delta_r"] == pytest.approx(0.004 + 4 * std + 0.001)
@@ -114,7 +114,7 @@ def test_delta_rule_is_mean_plus_two_std_plus_one_mm(pickplace_task):
 def test_wrong_plant_demo_is_left_out_of_the_delta_rule(pickplace_task):
     good = [as_demo(carry(pickplace_task, 5, grab_offset=(0.001, 0, 0))) for _ in range(2)]
     wrong = as_demo(carry(pickplace_task, 6))  # grabbed plant 6 while the teacher chose plant 5
-    ctx = pickplace_task.criteria_context([*good, wrong], pickplace_task.conditions[[5, 5, 5]])
+    ctx = pickplace_task.criteria_context([*good, wrong], pickplace_task.test_points[[5, 5, 5]])
     assert ctx["delta_g"] == pytest.approx(0.002)
 
 
@@ -124,28 +124,28 @@ def test_demonstrations_grab_the_chosen_plant(pickplace_task):
         raw = pickplace_task.demonstrate(plant, rng)
         assert 8.0 < pickplace_task.duration(raw) < 16.0
         demo = pickplace_task.preprocess(raw)
-        v = pickplace_task.judge_demo(demo, pickplace_task.conditions[plant])
+        v = pickplace_task.judge_demo(demo, pickplace_task.test_points[plant])
         assert v.passed[0], v.reasons
         np.testing.assert_allclose(
-            pickplace_task.condition_of(demo), pickplace_task.conditions[plant]
+            pickplace_task.test_point_of(demo), pickplace_task.test_points[plant]
         )
 
 
 def test_wrong_plant_and_sloppy_grab_are_incorrect(pickplace_task):
     rng = np.random.default_rng(1)
     wrong = pickplace_task.preprocess(pickplace_task.demonstrate(44, rng, mistake="wrong_plant"))
-    v = pickplace_task.judge_demo(wrong, pickplace_task.conditions[44])
+    v = pickplace_task.judge_demo(wrong, pickplace_task.test_points[44])
     assert not v.passed[0] and "instead of the chosen plant (5, 5)" in v.reasons[0]
     s = TeachingSession(pickplace_task)
     for p in (0, 99, 9, 90):
-        s.add_demo(pickplace_task.demonstrate(p, rng), condition=pickplace_task.conditions[p])
+        s.add_demo(pickplace_task.demonstrate(p, rng), point=pickplace_task.test_points[p])
     r = s.add_demo(
         pickplace_task.demonstrate(44, rng, mistake="wrong_plant"),
-        condition=pickplace_task.conditions[44],
+        point=pickplace_task.test_points[44],
     )
     assert INCORRECT in r.kinds and not r.demo_passed
     sloppy = pickplace_task.preprocess(pickplace_task.demonstrate(44, rng, mistake="sloppy_grab"))
-    v = pickplace_task.judge_demo(sloppy, pickplace_task.conditions[44])
+    v = pickplace_task.judge_demo(sloppy, pickplace_task.test_points[44])
     assert not v.passed[0] and "grabbed" in v.reasons[0]
 
 
@@ -186,7 +186,7 @@ def test_four_corner_demos_generalise_over_the_tray(pickplace_task):
     rng = np.random.default_rng(0)
     s = TeachingSession(pickplace_task)
     for p in (0, 99, 9, 90):
-        r = s.add_demo(pickplace_task.demonstrate(p, rng), condition=pickplace_task.conditions[p])
+        r = s.add_demo(pickplace_task.demonstrate(p, rng), point=pickplace_task.test_points[p])
     assert r.efficacy >= 0.8
 
 
@@ -204,7 +204,7 @@ def test_out_of_reach_path_is_flagged_with_its_reason(pickplace_task):
     traj = carry(pickplace_task, 5)
     traj[60:70, :3] = [0.2, -0.9, 0.3]  # far to the right, beyond the arm's reach
     v = pickplace_task.judge(
-        traj[None], pickplace_task.conditions[[5]], {"delta_g": 0.01, "delta_r": 0.01}
+        traj[None], pickplace_task.test_points[[5]], {"delta_g": 0.01, "delta_r": 0.01}
     )
     assert not v.passed[0]
     assert "left the arm's reachable, collision-free workspace at sample 61" in v.reasons[0]
@@ -219,7 +219,7 @@ def test_feasibility_options(pickplace_task):
     assert isinstance(full.feasibility, FullCheck)
     traj = carry(pickplace_task, 5)[None]
     ctx = {"delta_g": 0.01, "delta_r": 0.01}
-    assert full.judge(traj, pickplace_task.conditions[[5]], ctx).passed[0]
+    assert full.judge(traj, pickplace_task.test_points[[5]], ctx).passed[0]
     with pytest.raises(InvalidParameterError, match="'map', 'full'"):
         PickPlaceTask(pickplace_task.scene, feasibility="fast")
     with pytest.raises(InvalidParameterError, match="contains"):
@@ -237,7 +237,7 @@ def test_map_agrees_with_full_checks_on_500_realisations(pickplace_task):
         session = TeachingSession(pickplace_task)
         for p in rng.choice(100, m, replace=False):
             session.add_demo(
-                pickplace_task.demonstrate(int(p), rng), condition=pickplace_task.conditions[p]
+                pickplace_task.demonstrate(int(p), rng), point=pickplace_task.test_points[p]
             )
         realisations.append(session.realisations)
     R = np.concatenate(realisations)
@@ -281,8 +281,8 @@ def test_kinesthetic_wrong_plant_grabs_a_neighbour(pickplace_task):
     for corner in (0, 9, 90, 99):
         for seed in range(4):
             raw = demonstrate(sc, pickplace_task.start, corner, seed, mistake="wrong_plant")
-            grabbed = pickplace_task.nearest_condition(
-                pickplace_task.condition_of(pickplace_task.preprocess(raw))
+            grabbed = pickplace_task.nearest_test_point(
+                pickplace_task.test_point_of(pickplace_task.preprocess(raw))
             )
             (r0, c0), (r1, c1) = divmod(corner, sc.cols), divmod(grabbed, sc.cols)
             assert abs(r0 - r1) + abs(c0 - c1) == 1, (corner, grabbed)  # next to it, on the tray

@@ -90,7 +90,7 @@ def test_a_made_up_condition_is_one_entry_and_one_policy_class(made_up):
     task = PickPlaceTask()
     run = PickPlaceRun("XF", task)
     record = run.demonstrate(44, rng=np.random.default_rng(0))
-    assert record.shown.tolist() == [0, len(task.conditions) - 1]
+    assert record.shown.tolist() == [0, len(task.test_points) - 1]
     assert run.feedback == "corners" and not run.visibility().totals
     assert paper_condition("XF") == "BF"
 

@@ -286,7 +286,7 @@ def valid(maze_task, demos):
     run.add_demo(demos[2], mistake="slip")
     run.undo()
     run.reset()
-    run.add_demo(demos[4], condition=[0.05, 0.03])
+    run.add_demo(demos[4], point=[0.05, 0.03])
     run.finish()
     data = run.to_dict()
     VALIDATOR.validate(data)

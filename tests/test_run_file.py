@@ -395,7 +395,7 @@ def test_pickplace_load_is_all_or_nothing_with_a_malformed_condition(tmp_path):
         tmp_path / "two.json",
         [good, task.demonstrate(99, 1)],
         columns="txyzg",
-        conditions=[task.conditions[0], [5.0, 5.0, 5.0]],  # demo 2 meant for nowhere
+        points=[task.test_points[0], [5.0, 5.0, 5.0]],  # demo 2 meant for nowhere
     )
     app = PickPlaceTutor("BF", run_file=tmp_path / "bf.json")
     before = (app.run.n_demos, app.run.elapsed, app.record)

@@ -52,8 +52,8 @@ def two_clusters():
     )
     conditions = np.linspace(-1.0, 1.0, 21)[:, None]
     context = SelectionContext(
-        conditions=conditions,
-        demo_conditions=np.array(taught)[:, None],
+        test_points=conditions,
+        demo_points=np.array(taught)[:, None],
         learner=model,
         frames=[line_frames(c) for c in conditions[:, 0]],
         times=TIMES,
@@ -66,7 +66,7 @@ def two_clusters():
 
 def test_farthest_point_from_the_tray_centre_picks_the_corners_first():
     centre = TRAY.mean(axis=0)
-    ctx = SelectionContext(conditions=TRAY, demo_conditions=centre[None])
+    ctx = SelectionContext(test_points=TRAY, demo_points=centre[None])
     picks = SELECTORS["farthest"](6, ctx)
     assert set(picks[:4].tolist()) == CORNERS
     assert len(set(picks.tolist())) == 6
@@ -76,7 +76,7 @@ def test_farthest_point_from_the_tray_centre_picks_the_corners_first():
 
 
 def test_farthest_point_after_a_corner_goes_to_the_opposite_one():
-    ctx = SelectionContext(conditions=TRAY, demo_conditions=TRAY[[0]])
+    ctx = SelectionContext(test_points=TRAY, demo_points=TRAY[[0]])
     picks = FarthestPoint()(3, ctx)
     assert picks[0] == 99 and set(picks[1:].tolist()) == {9, 90}
 
@@ -140,7 +140,7 @@ def test_disagreement_on_the_tray_looks_across_a_line_of_demos(pickplace_task):
     rng = np.random.default_rng(3)
     for plant in (0, 44, 99):  # the diagonal
         record = session.add_demo(
-            pickplace_task.demonstrate(plant, rng), condition=pickplace_task.conditions[plant]
+            pickplace_task.demonstrate(plant, rng), point=pickplace_task.test_points[plant]
         )
     assert set(record.shown.tolist()) == {9, 90}  # the two corners off the diagonal
 
@@ -149,17 +149,17 @@ def test_picks_are_kept_the_minimum_distance_apart(pickplace_task):
     session = TeachingSession(pickplace_task, feedback="none")
     session.add_demo(
         pickplace_task.demonstrate(44, np.random.default_rng(4)),
-        condition=pickplace_task.conditions[44],
+        point=pickplace_task.test_points[44],
     )
     ctx = SelectionContext(
-        conditions=pickplace_task.conditions,
-        demo_conditions=np.array(session.conditions),
+        test_points=pickplace_task.test_points,
+        demo_points=np.array(session.demo_points),
         learner=session.learner,
-        frames=pickplace_task.frame_batch(pickplace_task.conditions),
+        frames=pickplace_task.frame_batch(pickplace_task.test_points),
         times=pickplace_task.times,
         realisations=session.realisations,
     )
-    X, _ = normalised_space(pickplace_task.conditions)
+    X, _ = normalised_space(pickplace_task.test_points)
     for spacing in (0.3, 0.5):
         picks = FrameDisagreement(min_distance=spacing)(5, ctx)
         gaps = np.linalg.norm(X[picks][:, None] - X[picks][None], axis=-1)
@@ -179,24 +179,24 @@ def test_the_oracle_picks_failures_nearest_to_the_demos_first():
     passed = np.ones(100, dtype=bool)
     passed[[1, 55, 99, 12]] = False
     ctx = SelectionContext(
-        conditions=TRAY, demo_conditions=TRAY[[0]], passed=passed, rng=np.random.default_rng(0)
+        test_points=TRAY, demo_points=TRAY[[0]], passed=passed, rng=np.random.default_rng(0)
     )
     assert select("failures", 3, ctx).tolist() == [1, 12, 55]
     assert select("failures", 10, ctx).tolist() == [1, 12, 55, 99]  # only 4 fail
     shuffled = PredictedFailures(order="random")(4, ctx)
     assert sorted(shuffled.tolist()) == [1, 12, 55, 99]
     with pytest.raises(InvalidParameterError, match="needs passed"):
-        select("failures", 3, SelectionContext(conditions=TRAY, demo_conditions=TRAY[[0]]))
+        select("failures", 3, SelectionContext(test_points=TRAY, demo_points=TRAY[[0]]))
 
 
 def test_random_picks_come_from_the_generator_without_repeats():
     make = lambda seed: SelectionContext(  # noqa: E731
-        conditions=TRAY, demo_conditions=TRAY[[0]], rng=np.random.default_rng(seed)
+        test_points=TRAY, demo_points=TRAY[[0]], rng=np.random.default_rng(seed)
     )
     a, b, c = (select("random", 5, make(s)) for s in (7, 7, 8))
     assert a.tolist() == b.tolist() != c.tolist() and len(set(a.tolist())) == 5
     with pytest.raises(InvalidParameterError, match="needs rng"):
-        select("random", 5, SelectionContext(conditions=TRAY, demo_conditions=TRAY[[0]]))
+        select("random", 5, SelectionContext(test_points=TRAY, demo_points=TRAY[[0]]))
 
 
 # ---------------------------------------------------------------- k and names
@@ -212,15 +212,15 @@ def test_k_larger_than_b_hat_shows_every_condition_once():
 
 @pytest.mark.parametrize("k", [0, -2, 2.5, "3", True, None])
 def test_a_bad_k_is_refused_with_what_k_means(k):
-    with pytest.raises(InvalidParameterError, match="how many test conditions the robot shows"):
+    with pytest.raises(InvalidParameterError, match="how many test points the robot shows"):
         check_k(k)
-    ctx = SelectionContext(conditions=TRAY, demo_conditions=TRAY[[0]])
+    ctx = SelectionContext(test_points=TRAY, demo_points=TRAY[[0]])
     with pytest.raises(InvalidParameterError, match="k must be a whole number >= 1"):
         select("farthest", k, ctx)
 
 
 def test_bad_selectors_and_options_are_refused(pickplace_task):
-    ctx = SelectionContext(conditions=TRAY, demo_conditions=TRAY[[0]])
+    ctx = SelectionContext(test_points=TRAY, demo_points=TRAY[[0]])
     with pytest.raises(InvalidParameterError, match="farthest, disagreement, failures, random"):
         select("kcenter", 5, ctx)
     with pytest.raises(InvalidParameterError, match="only used with feedback='adaptive'"):
@@ -238,7 +238,7 @@ def test_an_adaptive_session_shows_k_picks_and_withholds_the_totals(pickplace_ta
     session = TeachingSession(pickplace_task, feedback="adaptive", selector="farthest", k=4)
     record = session.add_demo(
         pickplace_task.demonstrate(44, np.random.default_rng(5)),
-        condition=pickplace_task.conditions[44],
+        point=pickplace_task.test_points[44],
     )
     assert record.shown.tolist()[:1] == [99] and len(record.shown) == 4
     from tutor.framework import reveal
@@ -276,7 +276,7 @@ def test_an_af_run_saved_and_loaded_shows_the_same_r(pickplace_task, tmp_path, s
     if selector == "random":  # a replay that picked again would show other plants
         again = PickPlaceRun("AF", pickplace_task, selector="random", rng=12)
         for d in run.attempt.demos:
-            again.add_demo(np.asarray(d.samples), condition=d.condition, seconds=d.seconds)
+            again.add_demo(np.asarray(d.samples), point=d.point, seconds=d.seconds)
         assert [r.shown.tolist() for r in again.session.history] != shown
 
 

@@ -207,7 +207,7 @@ def test_every_condition_has_short_plain_words():
         for condition in conditions:
             words = instruction_text(experiment, condition)
             assert len(words.split()) <= 45
-            assert "test condition" not in words and "eta" not in words.split()
+            assert "test point" not in words and "eta" not in words.split()
     with pytest.raises(InvalidParameterError, match="NF, VF, VR"):
         instruction_text(1, "BF")
 

@@ -40,7 +40,7 @@ def mixed_run(pickplace_task):
     run.demonstrate(18, raw=own, given="own", setup_seconds=3.0)
     run.demonstrate(81, mistake="sloppy_grab", rng=1)
     run.add_demos(
-        [(pickplace_task.demonstrate(88, rng=2), {"condition": pickplace_task.conditions[88]})],
+        [(pickplace_task.demonstrate(88, rng=2), {"point": pickplace_task.test_points[88]})],
         "f.json",
     )
     return run, own

@@ -59,7 +59,7 @@ def test_a_guided_demonstration_counts_its_duration_and_setup(own, pickplace_tas
     demo = own.run.attempt.demos[-1]
     assert demo.given == "own"
     np.testing.assert_allclose(np.asarray(demo.recording), raw, atol=6e-5)  # kept to 0.1 mm
-    assert demo.condition == tuple(pickplace_task.conditions[45])
+    assert demo.point == tuple(pickplace_task.test_points[45])
     spent = own.run.elapsed - before
     duration = raw[-1, 0] - raw[0, 0]
     # the demo, its setup and RF's one replay (25 s)

@@ -37,9 +37,9 @@ def test_the_scripted_hand_is_a_recording_a_person_could_make(pickplace_task):
             assert 0.1 < speed.max() < 1.5  # a hand's peak speed, not a jump
             assert set(np.unique(g)) == {0.0, 1.0}
             demo = pickplace_task.preprocess(raw)
-            verdict = pickplace_task.judge_demo(demo, pickplace_task.conditions[plant])
+            verdict = pickplace_task.judge_demo(demo, pickplace_task.test_points[plant])
             assert verdict.passed[0], verdict.reasons
-            assert pickplace_task.nearest_condition(pickplace_task.condition_of(demo)) == plant
+            assert pickplace_task.nearest_test_point(pickplace_task.test_point_of(demo)) == plant
     a, b = steady_hand(pickplace_task, 45, rng=1), steady_hand(pickplace_task, 45, rng=2)
     assert a.shape != b.shape or not np.allclose(a, b)  # people differ
     np.testing.assert_array_equal(steady_hand(pickplace_task, 45, rng=1), a)  # a seed is a person
@@ -158,7 +158,7 @@ def test_a_grab_elsewhere_is_a_real_demonstration_error(pickplace_task):
     run = PickPlaceRun("NF", pickplace_task)
     run.demonstrate(PLANT, raw=raw, given="own")
     demo = np.asarray(run.attempt.demos[-1].samples)
-    verdict = pickplace_task.judge_demo(demo, pickplace_task.conditions[PLANT])
+    verdict = pickplace_task.judge_demo(demo, pickplace_task.test_points[PLANT])
     assert not verdict.passed[0] and "instead of the chosen" in verdict.reasons[0]
 
 

@@ -194,8 +194,8 @@ def test_vf_maze_teacher_aims_at_red(maze_task):
         if why != "red":
             continue
         before = s.history[k - 1]
-        start = maze_task.condition_of(s.demos[k])
-        gap = np.linalg.norm(maze_task.conditions[~before.passed] - start, axis=1).min()
+        start = maze_task.test_point_of(s.demos[k])
+        gap = np.linalg.norm(maze_task.test_points[~before.passed] - start, axis=1).min()
         assert gap <= 0.02, f"demo {k + 1} started {gap:.3f} m from the nearest red start"
     # it stops on what it sees, not on its prior of 2 demos
     assert s.latest.efficacy >= 0.9 or run.attempt.stopped == "patience"
@@ -209,10 +209,10 @@ def test_vr_maze_teacher_follows_the_rules(maze_task):
     s = run.session
     # replay the rules: demo 2 starts within 4 cm of demo 1 (rule 2)
     assert [d.chosen_by for d in run.attempt.demos[:2]] == ["rule 1", "rule 2"]
-    first = maze_task.condition_of(s.demos[0])
+    first = maze_task.test_point_of(s.demos[0])
     advice = advise_from(maze_task, s.history[0].passed, first)
     assert advice.rule == 2  # one demo cannot surround its start with green
-    assert np.linalg.norm(maze_task.condition_of(s.demos[1]) - first) <= advice.radius + 1e-9
+    assert np.linalg.norm(maze_task.test_point_of(s.demos[1]) - first) <= advice.radius + 1e-9
 
 
 def test_maze_teacher_same_traits_in_every_condition(maze_task):
@@ -307,7 +307,7 @@ def test_sf_teacher_picks_tests_near_its_demos(pickplace):
     assert all(not test.after_run for test in run.attempt.tests)  # SF tests during the run
     tests = [p for test in run.attempt.tests for p in test.plants]
     assert tests, "an SF teacher with test_rate 1 asks for tests"
-    demos = {pickplace.nearest_condition(c) for c in run.session.conditions}
+    demos = {pickplace.nearest_test_point(c) for c in run.session.demo_points}
     cols = pickplace.scene.cols
 
     def near(p):
@@ -323,7 +323,7 @@ def test_teacher_remembers_failures_between_runs(pickplace):
     assert teacher.lessons and set(seen_failing) <= set(teacher.lessons)
     lessons = list(teacher.lessons)
     run2 = teacher.teach("BF", np.random.default_rng(13))
-    first = pickplace.nearest_condition(run2.session.conditions[0])
+    first = pickplace.nearest_test_point(run2.session.demo_points[0])
     assert first == lessons[0]
     nf = PickPlaceTeacher(traits(patience=2, enough_pickplace=2), pickplace)
     run = nf.teach("NF", np.random.default_rng(14))

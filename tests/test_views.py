@@ -144,7 +144,7 @@ def test_feedback_shows_green_red_and_blue(vf):
     assert _count(rgb, PASS) > 50
     assert _count(rgb, FAIL) > 50
     assert _count(rgb, DEMO) > 50
-    assert _realisation_segments(ax) == len(vf.task.conditions)
+    assert _realisation_segments(ax) == len(vf.task.test_points)
     assert len(_demo_lines(ax)) == 3
     numbers = {t.get_text() for t in ax.texts}
     assert {"1", "2", "3"} <= numbers
@@ -160,14 +160,14 @@ def test_no_feedback_draws_no_realisations(nf):
     assert any("no feedback shown" in t.get_text() for t in ax.texts)
     # the educator's view reveals R^ even though the teacher saw nothing
     revealed = plot_feedback(nf, reveal=True)
-    assert _realisation_segments(revealed) == len(nf.task.conditions)
+    assert _realisation_segments(revealed) == len(nf.task.test_points)
 
 
 def test_batch_feedback_and_reveal(bf):
     ax = plot_feedback(bf)
     assert _realisation_segments(ax) == len(BATCH)
     ax = plot_feedback(bf, reveal=True)
-    n = len(bf.task.conditions)
+    n = len(bf.task.test_points)
     assert _realisation_segments(ax) == n
     assert _realisation_segments(ax, min_width=1.5) == len(BATCH)  # r highlighted
 
@@ -175,7 +175,7 @@ def test_batch_feedback_and_reveal(bf):
 def test_past_step_uses_that_learner(vf):
     task = vf.task
     first = realisations_at(vf, 0)
-    expected, _ = vf._learners[0].reproduce_batch(task.frame_batch(task.conditions), task.times)
+    expected, _ = vf._learners[0].reproduce_batch(task.frame_batch(task.test_points), task.times)
     np.testing.assert_allclose(first, expected)
     assert realisations_at(vf, -1) is vf.realisations
     ax = plot_feedback(vf, step=0)
@@ -350,7 +350,7 @@ def test_sketchpad_sends_paths_as_bytes_and_counts_reasons(vf, maze_task):
     pad = Sketchpad(maze=layout_spec(maze_task.layout))
     rec = vf.latest
     pad.show(vf.demos, vf.realisations, rec.passed, rec.shown, causes=rec.causes)
-    n = len(maze_task.conditions)
+    n = len(maze_task.test_points)
     assert isinstance(pad.real_xy, bytes) and len(pad.real_xy) == n * BROWSER_SAMPLES * 2 * 4
     assert len(pad.realisations) == n and len(pad.demos) == 3
     np.testing.assert_allclose(pad.realisations[7][-1], vf.realisations[7, -1], atol=1e-6)

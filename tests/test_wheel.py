@@ -92,7 +92,7 @@ records["maze"] = [len(good), rec.n_demos, rec.efficacy]
 
 pick = PickPlaceTask()
 corners = bundled_demos("pickplace_corners")
-rec = TeachingSession(pick).add_demo(corners[0], condition=corners.conditions[0])
+rec = TeachingSession(pick).add_demo(corners[0], point=corners.demo_points[0])
 records["pickplace"] = [len(corners), rec.n_demos, rec.efficacy]
 
 modules = {

@@ -9,7 +9,7 @@ JSON (``*.json``)::
      "conditions": [[...], null, ...]}
 
 ``version`` may be left out (it is then 1); other versions are refused.
-``conditions`` is optional: the test condition the teacher meant each demo for (for
+``conditions`` is optional: the test point the teacher meant each demo for (for
 pick-and-place the chosen plant's grasp point), ``null`` where not recorded. It lets a
 session tell a demo to the wrong place from a demo to the right one.
 
@@ -95,22 +95,23 @@ class DemoSet:
         Column names, time first.
     task : str or None
     description : str
-    conditions : list of (ndarray or None)
-        The condition each demo was meant for, None where not recorded.
+    points : list of (ndarray or None)
+        The test point each demo was meant for, None where not recorded (the file's
+        ``"conditions"``).
     """
 
-    def __init__(self, demos, columns=("t", "x", "y"), task=None, description="", conditions=None):
+    def __init__(self, demos, columns=("t", "x", "y"), task=None, description="", points=None):
         self.demos = [np.asarray(d, dtype=float) for d in demos]
         self.columns = list(columns)
         self.task = task
         self.description = description
-        if conditions is None:
-            conditions = [None] * len(self.demos)
-        if len(conditions) != len(self.demos):
+        if points is None:
+            points = [None] * len(self.demos)
+        if len(points) != len(self.demos):
             raise InvalidFileError(
-                f"{len(conditions)} conditions for {len(self.demos)} demos: give one per demo"
+                f"{len(points)} test points for {len(self.demos)} demos: give one per demo"
             )
-        self.conditions = [None if c is None else np.asarray(c, float) for c in conditions]
+        self.demo_points = [None if c is None else np.asarray(c, float) for c in points]
 
     def __len__(self) -> int:
         return len(self.demos)
@@ -184,11 +185,12 @@ def _arrangement(found: list[str], expected, where: str) -> tuple[list[int], lis
 
 
 def save_demos(
-    path, demos, task=None, columns=("t", "x", "y"), description="", conditions=None
+    path, demos, task=None, columns=("t", "x", "y"), description="", points=None
 ) -> Path:
     """Write demos atomically as JSON or CSV (chosen by the file's suffix).
 
-    ``conditions`` (one per demo, or None) is kept in JSON only.
+    ``points`` (each demo's test point, or None) is kept in JSON only (as
+    ``"conditions"``).
 
     Raises
     ------
@@ -217,9 +219,9 @@ def save_demos(
         "description": description,
         "demos": [d.tolist() for d in demos],
     }
-    if conditions is not None:
+    if points is not None:
         record["conditions"] = [
-            None if c is None else np.asarray(c, float).tolist() for c in conditions
+            None if c is None else np.asarray(c, float).tolist() for c in points
         ]
     return write_json(path, record)
 

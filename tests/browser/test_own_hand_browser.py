@@ -189,7 +189,7 @@ def check_run_file(record: dict, condition: str, figures: dict) -> None:
     scene = pickplace_scene()
     for demo, plant in zip(demos, PLANTS, strict=True):
         assert demo.given == "own"
-        np.testing.assert_allclose(demo.condition, scene.plant_positions[plant], atol=1e-9)
+        np.testing.assert_allclose(demo.point, scene.plant_positions[plant], atol=1e-9)
         t = np.asarray(demo.recording)[:, 0]
         spacing = np.diff(t) * 1e3
         assert spacing.min() > 0 and spacing.max() <= 50.0, (spacing.min(), spacing.max())

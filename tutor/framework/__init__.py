@@ -1,6 +1,6 @@
 """The teaching framework of Sena & Howard, independent of any particular task.
 
-- :mod:`.task`: what a task supplies (test conditions B^, frames, criteria).
+- :mod:`.task`: what a task supplies (test points B^, frames, criteria).
 - :mod:`.metrics`: efficacy eps, efficiency eta, the session score.
 - :mod:`.failures`: incorrect, ambiguous and undemonstrated failures.
 - :mod:`.feedback`: the feedback policies (what r is, what totals may be shown).

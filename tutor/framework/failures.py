@@ -14,7 +14,7 @@ ambiguous
     By default s is the mean distance, sample by sample after aligning in time,
     to the nearest earlier demo.
 undemonstrated
-    Test conditions the learner fails and no demo covers:
+    Test points the learner fails and no demo covers:
     :math:`B^ \setminus (R^ \cup b)`, counted and located.
 """
 
@@ -53,7 +53,7 @@ class Thresholds:
     delta_lower, delta_upper : float
         delta_l and delta_u: the range of efficacy change that counts as
         "little or no change" for a similar demo (default -0.05 to +0.02, i.e.
-        losing at most 5 % or gaining at most 2 % of the test conditions).
+        losing at most 5 % or gaining at most 2 % of the test points).
     """
 
     ambiguity_distance: float | None = None
@@ -86,7 +86,7 @@ class TeachingWarning:
     demo : int or None
         1-based number of the demo concerned (None for undemonstrated states).
     count : int
-        How many test conditions (undemonstrated) or demos (otherwise) it concerns.
+        How many test points (undemonstrated) or demos (otherwise) it concerns.
     take_back : tuple of int
         The demos (1-based) the message asks the trainee to take back, so that each view
         can say how it does that (the tutors' Undo button, a list in a notebook cell).
@@ -223,7 +223,7 @@ def demo_warnings(
 def undemonstrated_warning(
     mask, noun: str, noun_plural: str, describe_where
 ) -> TeachingWarning | None:
-    """The warning for B^ \\ (R^ or b) given its mask over the test conditions, or None."""
+    """The warning for B^ \\ (R^ or b) given its mask over the test points, or None."""
     k = int(np.count_nonzero(mask))
     if k == 0:
         return None

@@ -1,7 +1,7 @@
 r"""Feedback policies: which realisations :math:`r \subseteq \hat R` a teacher is shown,
 and what may be said about the rest (Sena & Howard, "Experiment 1" and "Experiment 2").
 
-After demo :math:`m` the robot has realised every test condition of :math:`\hat B`; a
+After demo :math:`m` the robot has realised every test point of :math:`\hat B`; a
 *policy* decides the set :math:`r` the teacher sees, and whether the totals over all of
 :math:`\hat B` (the efficacy :math:`\varepsilon`, its change :math:`\delta`, the
 efficiency :math:`\eta = \varepsilon / |b|` and the count of undemonstrated states) may

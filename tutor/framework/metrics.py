@@ -1,10 +1,10 @@
 r"""Teaching metrics of Sena & Howard (section "Evaluating Teaching").
 
-Notation: B^ the test conditions, R^ the realisations from every condition,
+Notation: B^ the test points, R^ the realisations from every condition,
 b the demonstration set with M = |b| demos.
 
 - Teaching efficacy :math:`\varepsilon = |R^ \cap B^| / |B^|` in [0, 1]: the share of
-  test conditions whose realisation meets the task criteria.
+  test points whose realisation meets the task criteria.
 - Teaching efficiency :math:`\eta = \varepsilon / |b|`.
 - The paper's session scores, one rule per experiment (:data:`SCORING_RULES`):
 
@@ -41,7 +41,7 @@ __all__ = [
 
 
 def efficacy(passed) -> float:
-    """Share of test conditions passed: eps = |R^ and B^| / |B^|.
+    """Share of test points passed: eps = |R^ and B^| / |B^|.
 
     Parameters
     ----------

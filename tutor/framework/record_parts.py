@@ -58,7 +58,7 @@ EVENT_KINDS = (
     "load",  # demonstrations came from a file
     "reset",  # a new, empty attempt replaced the current one (the old one is kept)
     "restore",  # an earlier attempt was brought back as a new attempt
-    "test",  # the robot tried chosen test conditions
+    "test",  # the robot tried chosen test points
     "spend",  # clock time besides demos and robot attempts (Experiment 2)
     "finish",  # the trainee ended the run
 )
@@ -147,11 +147,12 @@ class Demo:
     ----------
     samples : tuple of tuple of float
         The demonstration as the task preprocessed it, one row per sample (time first).
-    condition : tuple of float or None
-        The test condition it was meant for (e.g. the plant chosen); None when the task
+    point : tuple of float or None
+        The test point it was meant for (e.g. the plant chosen; stored under the file's
+        key ``"condition"``, as format version 1 has it); None when the task
         reads it off the demo.
     shown : tuple of int or None
-        SF: the test conditions the trainee asked to see after it; AF (an "adaptive"
+        SF: the test points the trainee asked to see after it; AF (an "adaptive"
         condition): the conditions the selector picked after it, in the order picked;
         None otherwise.
     seconds : float or None
@@ -175,7 +176,7 @@ class Demo:
     """
 
     samples: tuple[tuple[float, ...], ...]
-    condition: tuple[float, ...] | None = None
+    point: tuple[float, ...] | None = None
     shown: tuple[int, ...] | None = None
     seconds: float | None = None
     followed_rule: bool | None = None
@@ -187,7 +188,7 @@ class Demo:
     def to_dict(self) -> dict:
         return {
             "samples": [list(r) for r in self.samples],
-            "condition": None if self.condition is None else list(self.condition),
+            "condition": None if self.point is None else list(self.point),
             "shown": None if self.shown is None else list(self.shown),
             "seconds": self.seconds,
             "followed_rule": self.followed_rule,
@@ -231,7 +232,7 @@ class Demo:
         rule = d.get("followed_rule")
         return cls(
             samples=samples,
-            condition=None if cond is None else _numbers(cond, f"{path}.condition"),
+            point=None if cond is None else _numbers(cond, f"{path}.condition"),
             shown=None if shown is None else _indices(shown, f"{path}.shown"),
             seconds=None if seconds is None else _num(seconds, f"{path}.seconds", 0.0),
             followed_rule=None if rule is None else _bool(rule, f"{path}.followed_rule"),

@@ -243,7 +243,7 @@ class TeachingRun:
         shown = () if rec is None else np.r_[rec.shown, np.asarray(extra_shown, dtype=int)]
         return reveal(
             self.feedback,
-            len(self.task.conditions),
+            len(self.task.test_points),
             shown,
             finished=self.finished,
             practice=self._record.practice,
@@ -298,7 +298,7 @@ class TeachingRun:
                 session.add_demo(
                     np.asarray(demo.samples, dtype=float),
                     shown=demo.shown if self.policy.keeps_picks else None,
-                    condition=None if demo.condition is None else np.asarray(demo.condition),
+                    point=None if demo.point is None else np.asarray(demo.point),
                 )
             except TutorError as exc:
                 raise InvalidFileError(f"demo {i} of the run cannot be replayed: {exc}") from exc
@@ -341,7 +341,7 @@ class TeachingRun:
         self,
         raw,
         *,
-        condition=None,
+        point=None,
         shown=None,
         seconds: float | None = None,
         followed_rule: bool | None = None,
@@ -352,8 +352,8 @@ class TeachingRun:
     ) -> DemoStep:
         """Add one demonstration; returns the feedback after it.
 
-        ``condition`` is the test condition it was meant for (read off the demo when
-        None); ``shown`` the conditions asked to see (SF); ``seconds`` its cost on the
+        ``point`` is the test point it was meant for (read off the demo when
+        None); ``shown`` the test points asked to see (SF); ``seconds`` its cost on the
         clock; ``followed_rule`` VR's rule compliance or HF's hint following;
         ``chosen_by`` and ``mistake`` notes on why it was given and what went wrong on
         purpose (simulated teachers, the hand); ``given`` how it was given
@@ -374,14 +374,14 @@ class TeachingRun:
         self._check_room(1)
         given = check_given(given)
         kept = None if recording is None else round_recording(_recording(recording))
-        record = self.session.add_demo(raw, shown=shown, condition=condition)
+        record = self.session.add_demo(raw, shown=shown, point=point)
         if followed_rule is None:
             followed_rule = self._rule_followed(self.session.latest_demo)
         if self.policy.adaptive:
             shown = record.shown  # the selector's picks, kept so that a replay shows them
         demo = Demo(
             samples=tuple(_floats(row) for row in self.session._demos[-1]),
-            condition=None if condition is None else _floats(self.session._conditions[-1]),
+            point=None if point is None else _floats(self.session.demo_points[-1]),
             shown=None if shown is None else tuple(int(i) for i in np.ravel(shown)),
             seconds=None if seconds is None else float(seconds),
             followed_rule=None if followed_rule is None else bool(followed_rule),
@@ -462,15 +462,15 @@ class TeachingRun:
         rec = self.session.latest
         if rec is None:
             raise InvalidParameterError("give a demonstration before testing the robot")
-        n = len(self.task.conditions)
+        n = len(self.task.test_points)
         idx = tuple(int(p) for p in plants)
         if not idx:
             raise InvalidParameterError(
-                f"no {self.task.condition_noun} was chosen to test: choose at least one"
+                f"no {self.task.point_noun} was chosen to test: choose at least one"
             )
         if any(not 0 <= p < n for p in idx):
             raise InvalidParameterError(
-                f"{self.task.condition_noun_plural} are numbers from 0 to {n - 1}"
+                f"{self.task.point_noun_plural} are numbers from 0 to {n - 1}"
             )
         a = self.attempt
         attempt = replace(a, tests=(*a.tests, Test(a.n_demos, idx, bool(after_run))))

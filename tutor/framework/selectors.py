@@ -1,29 +1,29 @@
-r"""Adaptive test sets: which k conditions of :math:`\hat B` the robot shows after a demo.
+r"""Adaptive test sets: which k test points of :math:`\hat B` the robot shows after a demo.
 
 Sena & Howard end on an open problem: choosing the set :math:`r` of shown realisations
 automatically and economically for a general task (their BF fixed four corners and the
-centre by hand). A *selector* answers it: after each demo it picks k conditions (indices
+centre by hand). A *selector* answers it: after each demo it picks k test points (indices
 into :math:`\hat B`, in the order picked) from what the framework knows then, passed in
-as a :class:`SelectionContext`: the conditions of :math:`\hat B`, the demos' conditions,
+as a :class:`SelectionContext`: the test points of :math:`\hat B`, the demos' test points,
 the fitted learner and its frames, the realisations, and (for the oracle only) the
 task's verdict. The framework knows no task: distances are taken in the *normalised
-condition space*, each column of the condition array scaled to [0, 1] over
+test-point space*, each column of the test point array scaled to [0, 1] over
 :math:`\hat B` (a constant column is left as it is).
 
 ============== ===== ==================================================================
 selector       short picks
 ============== ===== ==================================================================
-farthest       KC    greedily the condition farthest from the demos' conditions and the
-                     conditions already picked (k-centre)
+farthest       KC    greedily the test point farthest from the demos' test points and the
+                     test points already picked (k-centre)
 disagreement   DIS   the highest score :math:`s` below (frame disagreement and distance),
                      each pick at least ``min_distance`` from the others
-failures       ORC   k of the conditions whose realisation fails the task's criteria,
+failures       ORC   k of the test points whose realisation fails the task's criteria,
                      nearest to the demos first (an oracle, for reference only: no real
                      robot knows where it fails without trying)
-random         RAND  k conditions uniformly at random (the run's generator; the control)
+random         RAND  k test points uniformly at random (the run's generator; the control)
 ============== ===== ==================================================================
 
-The disagreement score of a condition :math:`c` combines the frames' disagreement
+The disagreement score of a test point :math:`c` combines the frames' disagreement
 :math:`D(c)` (:func:`tutor.tpgmm.frame_views.frame_disagreement`)
 
 .. math::
@@ -33,7 +33,7 @@ The disagreement score of a condition :math:`c` combines the frames' disagreemen
 
 with :math:`(\xi_j, \Sigma_j)` frame :math:`j`'s regression mapped into the world for
 :math:`c` and :math:`\mu` the product-of-frames mean, and the distance :math:`d(c)` from
-:math:`c` to the nearest demo's condition, each scaled to [0, 1] over :math:`\hat B`:
+:math:`c` to the nearest demo's test point, each scaled to [0, 1] over :math:`\hat B`:
 
 .. math::
 
@@ -43,17 +43,17 @@ with :math:`(\xi_j, \Sigma_j)` frame :math:`j`'s regression mapped into the worl
 Why a product with the distance: :math:`D` alone misses the gaps *between* clusters of
 demos and points at the demos themselves. In a gap the fixed frames (the start, the
 bin) see the clusters averaged, a mean between them with a wide covariance, and the
-frame of the condition agrees with that mean, so :math:`D` is near 0 where the robot
-has never been shown anything; at a demonstrated condition the fixed frames still see
-that average while the condition's frame is sure, so :math:`D` is large where the
+frame of the test point agrees with that mean, so :math:`D` is near 0 where the robot
+has never been shown anything; at a demonstrated test point the fixed frames still see
+that average while the test point's frame is sure, so :math:`D` is large where the
 robot has been shown exactly what to do (``tests/test_selectors.py`` measures both).
-The distance finds the gaps and scores a demonstrated condition 0; :math:`D` at most
-doubles the score where the frames disagree, so of two conditions as far from the
+The distance finds the gaps and scores a demonstrated test point 0; :math:`D` at most
+doubles the score where the frames disagree, so of two test points as far from the
 demos the one the learner generalises to worse comes first (e.g. across, rather than
 along, a line of demos). Where the frames agree everywhere (one frame, or frames that
 coincide) :math:`D = 0` and the score is the distance alone.
-When no condition is ``min_distance`` from every pick, the next pick is the best of the
-rest, so a selector always shows :math:`\min(k, |\hat B|)` conditions (the same cost
+When no test point is ``min_distance`` from every pick, the next pick is the best of the
+rest, so a selector always shows :math:`\min(k, |\hat B|)` test points (the same cost
 after every demo); only the oracle shows fewer, when fewer realisations fail.
 
 Selectors are deterministic given their context (``random`` given its generator); a run
@@ -89,7 +89,7 @@ __all__ = [
 
 #: the selector AF uses unless told otherwise
 DEFAULT_SELECTOR = "disagreement"
-#: conditions shown after each demo unless told otherwise (BF's five: the same cost)
+#: test points shown after each demo unless told otherwise (BF's five: the same cost)
 DEFAULT_K = 5
 
 
@@ -99,18 +99,18 @@ class SelectionContext:
 
     Attributes
     ----------
-    conditions : ndarray (n, c)
-        :math:`\hat B`, the task's test conditions.
-    demo_conditions : ndarray (M, c)
-        The condition each demo so far was given under.
+    test_points : ndarray (n, c)
+        :math:`\hat B`, the task's test points.
+    demo_points : ndarray (M, c)
+        The test point each demo so far was given for.
     learner : TPGMM, optional
         The learner fitted on those demos (``disagreement``).
     frames : FrameBatch, optional
-        The frames of every condition of :math:`\hat B` (``disagreement``).
+        The frames of every test point of :math:`\hat B` (``disagreement``).
     times : ndarray (T,), optional
         The times of the realisations (``disagreement``).
     realisations : ndarray (n, T, d), optional
-        The product-of-frames means :math:`\\mu` for every condition (``disagreement``
+        The product-of-frames means :math:`\\mu` for every test point (``disagreement``
         recomputes them when missing).
     passed : ndarray of bool (n,), optional
         The task's criteria applied to the realisations (``failures``, the oracle).
@@ -118,8 +118,8 @@ class SelectionContext:
         The run's generator (``random``, and the oracle's ``order="random"``).
     """
 
-    conditions: np.ndarray
-    demo_conditions: np.ndarray
+    test_points: np.ndarray
+    demo_points: np.ndarray
     learner: object = None
     frames: object = None
     times: np.ndarray | None = None
@@ -128,22 +128,22 @@ class SelectionContext:
     rng: np.random.Generator | None = None
 
     @classmethod
-    def of_task(cls, task, demo_conditions, learner, **known) -> SelectionContext:
+    def of_task(cls, task, demo_points, learner, **known) -> SelectionContext:
         """The context after a demo of ``task`` (its B^, frames and times filled in);
         ``known`` gives the other fields the caller has (``realisations``, ``passed``,
         ``rng``)."""
         return cls(
-            conditions=np.asarray(task.conditions),
-            demo_conditions=np.array(demo_conditions),
+            test_points=np.asarray(task.test_points),
+            demo_points=np.array(demo_points),
             learner=learner,
-            frames=task.frame_batch(task.conditions),
+            frames=task.frame_batch(task.test_points),
             times=task.times,
             **known,
         )
 
     @property
     def n(self) -> int:
-        return len(self.conditions)
+        return len(self.test_points)
 
     def need(self, selector: str, *names: str) -> None:
         """Raise InvalidParameterError unless every field ``names`` is given."""
@@ -155,13 +155,13 @@ class SelectionContext:
             )
 
 
-def normalised_space(conditions, points=None):
-    """Conditions (and ``points``) in the normalised condition space.
+def normalised_space(test_points, points=None):
+    """Test points (and ``points``) in the normalised test-point space.
 
-    Each column of ``conditions`` (n, ...) is scaled to [0, 1] over its rows; a constant
+    Each column of ``test points`` (n, ...) is scaled to [0, 1] over its rows; a constant
     column is only shifted. Returns ``(X (n, c), Y (m, c))``, ``Y`` empty without points.
     """
-    X = np.asarray(conditions, dtype=float).reshape(len(conditions), -1)
+    X = np.asarray(test_points, dtype=float).reshape(len(test_points), -1)
     lo, span = X.min(axis=0), np.ptp(X, axis=0)
     span = np.where(span > 0, span, 1.0)
     if points is None:
@@ -179,7 +179,7 @@ def _distance_to(X, Y) -> np.ndarray:
 
 
 class Selector:
-    """A way of picking k conditions of B^ after a demo (see the module docstring).
+    """A way of picking k test points of B^ after a demo (see the module docstring).
 
     Subclasses set ``name``, ``short`` (the study's label) and ``description`` and
     implement :meth:`pick`; call a selector as ``selector(k, context)``.
@@ -203,13 +203,13 @@ class Selector:
 
 
 class FarthestPoint(Selector):
-    """Greedy k-centre: the condition farthest from the demos and the picks so far."""
+    """Greedy k-centre: the test point farthest from the demos and the picks so far."""
 
     name, short = "farthest", "KC"
-    description = "the conditions farthest from the demos (and from each other)"
+    description = "the test points farthest from the demos (and from each other)"
 
     def pick(self, k, context):
-        X, Y = normalised_space(context.conditions, context.demo_conditions)
+        X, Y = normalised_space(context.test_points, context.demo_points)
         gap = _distance_to(X, Y)
         picks: list[int] = []
         for _ in range(k):
@@ -226,7 +226,7 @@ class FrameDisagreement(Selector):
     Parameters
     ----------
     min_distance : float
-        The least distance between two picks in the normalised condition space (0.3: on
+        The least distance between two picks in the normalised test-point space (0.3: on
         a 10 x 10 tray about three plants apart, so five picks fit with room to spare).
     """
 
@@ -240,19 +240,19 @@ class FrameDisagreement(Selector):
         return f"FrameDisagreement(min_distance={self.min_distance:g})"
 
     def scores(self, context: SelectionContext) -> np.ndarray:
-        """:math:`s(c)` of every condition of B^ (the module docstring), shape (n,)."""
+        """:math:`s(c)` of every test point of B^ (the module docstring), shape (n,)."""
         context.need(self.name, "learner", "frames", "times")
         D = frame_disagreement(
             context.learner, context.frames, context.times, context.realisations
         )
-        X, Y = normalised_space(context.conditions, context.demo_conditions)
+        X, Y = normalised_space(context.test_points, context.demo_points)
         gap = _distance_to(X, Y)
         gap = np.where(np.isfinite(gap), gap, 0.0)
         return _unit(gap) * (1.0 + _unit(D))
 
     def pick(self, k, context):
         score = self.scores(context)
-        X, _ = normalised_space(context.conditions)
+        X, _ = normalised_space(context.test_points)
         order = np.argsort(-score, kind="stable")
         apart = np.full(len(X), np.inf)  # distance to the nearest pick
         picks: list[int] = []
@@ -273,17 +273,17 @@ def _unit(values) -> np.ndarray:
 
 
 class PredictedFailures(Selector):
-    """The oracle: k conditions whose realisation fails (the task's criteria).
+    """The oracle: k test points whose realisation fails (the task's criteria).
 
     Parameters
     ----------
     order : {"nearest", "random"}
-        Which failures first: nearest to the demos' conditions, or at random with the
+        Which failures first: nearest to the demos' test points, or at random with the
         run's generator.
     """
 
     name, short = "failures", "ORC"
-    description = "conditions the robot fails at (an oracle, for reference only)"
+    description = "test points the robot fails at (an oracle, for reference only)"
 
     def __init__(self, order: str = "nearest"):
         if order not in ("nearest", "random"):
@@ -298,23 +298,23 @@ class PredictedFailures(Selector):
         passed = np.asarray(context.passed, dtype=bool).ravel()
         if passed.shape != (context.n,):
             raise InvalidParameterError(
-                f"passed must hold one verdict per condition of B^ ({context.n}), "
+                f"passed must hold one verdict per test point of B^ ({context.n}), "
                 f"got {passed.size}"
             )
         failing = np.flatnonzero(~passed)
         if self.order == "random":
             context.need(self.name, "rng")
             return context.rng.permutation(failing)[:k]
-        X, Y = normalised_space(context.conditions, context.demo_conditions)
+        X, Y = normalised_space(context.test_points, context.demo_points)
         gap = _distance_to(X[failing], Y)
         return failing[np.argsort(gap, kind="stable")][:k]
 
 
 class RandomPick(Selector):
-    """k conditions uniformly at random, without repeats (the study's control)."""
+    """k test points uniformly at random, without repeats (the study's control)."""
 
     name, short = "random", "RAND"
-    description = "conditions chosen at random (the control)"
+    description = "test points chosen at random (the control)"
 
     def pick(self, k, context):
         context.need(self.name, "rng")
@@ -328,13 +328,13 @@ SELECTORS: dict[str, Selector] = {
 
 
 def check_k(k) -> int:
-    """``k`` as an int >= 1 (how many conditions are shown after each demo)."""
+    """``k`` as an int >= 1 (how many test points are shown after each demo)."""
     try:
         return check_count(k, "k")
     except InvalidParameterError as exc:
         raise InvalidParameterError(
-            f"{exc}: k is how many test conditions the robot shows after each demo "
-            f"(AF shows {DEFAULT_K}, BF's cost); a k above |B^| shows every condition"
+            f"{exc}: k is how many test points the robot shows after each demo "
+            f"(AF shows {DEFAULT_K}, BF's cost); a k above |B^| shows every test point"
         ) from None
 
 

@@ -2,7 +2,7 @@ r"""A teaching session: demos in, demo steps out (Sena & Howard, sections
 "Learning and Teaching Framework" and "Evaluating Teaching").
 
 After each demo the session refits the learner :math:`\lambda` (warm start),
-realises the task from every test condition in B^ to get R^, judges R^ with the
+realises the task from every test point in B^ to get R^, judges R^ with the
 task's criteria, and reports efficacy eps, efficiency eta, the change in eps, the
 set r of realisations the teacher is shown (by feedback mode) and the failures
 (incorrect, ambiguous, undemonstrated; see :mod:`tutor.framework.failures`).
@@ -58,7 +58,7 @@ FEEDBACK_MODES = tuple(FEEDBACK_POLICIES)
 class DemoStep:
     """What the tutor knows after demo number ``n_demos``.
 
-    Arrays are over the test conditions B^ (length n) unless said otherwise.
+    Arrays are over the test points B^ (length n) unless said otherwise.
     """
 
     n_demos: int  #: M = |b|
@@ -120,7 +120,7 @@ class TeachingSession:
     thresholds : Thresholds, optional
         Failure thresholds; defaults documented in :class:`Thresholds`.
     batch : sequence of int, optional
-        Indices into ``task.conditions`` shown in ``"batch"`` mode.
+        Indices into ``task.test_points`` shown in ``"batch"`` mode.
     selector : str or Selector, optional
         ``"adaptive"`` mode: a name in :data:`tutor.framework.selectors.SELECTORS`
         (default ``"disagreement"``) or a :class:`~tutor.framework.selectors.Selector`.
@@ -146,7 +146,7 @@ class TeachingSession:
             raise InvalidParameterError(
                 f"feedback must be one of {', '.join(FEEDBACK_POLICIES)}; got {feedback!r}"
             )
-        n = len(task.conditions)
+        n = len(task.test_points)
         batch = np.asarray([] if batch is None else batch, dtype=int).ravel()
         policy = FEEDBACK_POLICIES[feedback]
         if policy.needs_batch and batch.size == 0:
@@ -170,7 +170,7 @@ class TeachingSession:
         self.rng = np.random.default_rng(check_seed(rng, "rng"))
         self._fresh_learner = learner if learner is not None else task.make_learner()
         self._demos: list[np.ndarray] = []
-        self._conditions: list[np.ndarray] = []
+        self._demo_points: list[np.ndarray] = []
         self._history: list[DemoStep] = []
         self._learners: list = []
         self._realisations: list[np.ndarray] = []
@@ -180,12 +180,12 @@ class TeachingSession:
     @property
     def _stacks(self) -> tuple[list, ...]:
         """The per-demo lists, kept the same length."""
-        return (self._demos, self._conditions, self._learners, self._realisations, self._history)
+        return (self._demos, self._demo_points, self._learners, self._realisations, self._history)
 
     @property
-    def conditions(self) -> list[np.ndarray]:
-        """The condition each demo was given under (copies)."""
-        return [c.copy() for c in self._conditions]
+    def demo_points(self) -> list[np.ndarray]:
+        """The test point each demo was given for (copies)."""
+        return [c.copy() for c in self._demo_points]
 
     @property
     def demos(self) -> list[np.ndarray]:
@@ -238,7 +238,7 @@ class TeachingSession:
 
     # ---------------------------------------------------------------- teaching
 
-    def add_demo(self, raw, shown=None, condition=None) -> DemoStep:
+    def add_demo(self, raw, shown=None, point=None) -> DemoStep:
         """Add one demonstration and return the feedback after it.
 
         Parameters
@@ -246,12 +246,12 @@ class TeachingSession:
         raw : array-like
             A recording the task's ``preprocess`` accepts (e.g. (T, 3) of t, x, y).
         shown : sequence of int, optional
-            In ``"selected"`` mode: the test conditions the teacher asks to see. In
+            In ``"selected"`` mode: the test points the teacher asks to see. In
             ``"adaptive"`` mode: the picks recorded when this demo was first given (a
             replay); None picks them now.
-        condition : array-like, optional
-            The condition the teacher meant to demonstrate (e.g. the plant they chose);
-            by default the task reads it off the demo (``task.condition_of``).
+        point : array-like, optional
+            The test point the teacher meant to demonstrate (e.g. the plant they chose);
+            by default the task reads it off the demo (``task.test_point_of``).
 
         Raises
         ------
@@ -260,16 +260,16 @@ class TeachingSession:
         """
         task = self.task
         demo = task.preprocess(raw)
-        cond = self._check_condition(demo, condition)
+        point = self._check_point(demo, point)
         selected = self._check_shown(shown)
         replayed = shown is not None
         demos = [*self._demos, demo]
-        conds = [*self._conditions, cond]
+        points = [*self._demo_points, point]
         learner = copy.deepcopy(self.learner)
-        learner.fit(demos, [task.frames(c) for c in conds])
-        record, realisations = self._evaluate(learner, demos, conds, selected, replayed)
+        learner.fit(demos, [task.frames(c) for c in points])
+        record, realisations = self._evaluate(learner, demos, points, selected, replayed)
         self._demos.append(demo)
-        self._conditions.append(cond)
+        self._demo_points.append(point)
         self._learners.append(learner)
         self._realisations.append(realisations)
         self._history.append(record)
@@ -295,13 +295,13 @@ class TeachingSession:
         if number == self.n_demos:
             return self.undo()
         later = self._demos[number:]
-        later_conditions = self._conditions[number:]
+        later_points = self._demo_points[number:]
         shown = [r.shown for r in self._history[number:]]
         for stack in self._stacks:
             del stack[number - 1 :]
         keep = self.policy.keeps_picks  # what was shown stays what was shown
-        for demo, cond, sel in zip(later, later_conditions, shown, strict=True):
-            self.add_demo(demo, shown=sel if keep else None, condition=cond)
+        for demo, point, sel in zip(later, later_points, shown, strict=True):
+            self.add_demo(demo, shown=sel if keep else None, point=point)
         return self.latest
 
     def reset(self) -> None:
@@ -318,51 +318,51 @@ class TeachingSession:
                 "'adaptive' (the picks of a replayed demo)"
             )
         idx = np.asarray(shown, dtype=int).ravel()
-        n = len(self.task.conditions)
+        n = len(self.task.test_points)
         if np.any((idx < 0) | (idx >= n)):
             raise InvalidParameterError(f"shown indices must lie in 0..{n - 1}")
         return idx
 
-    def _check_condition(self, demo, condition) -> np.ndarray:
+    def _check_point(self, demo, given) -> np.ndarray:
         task = self.task
-        if condition is None:
-            return np.asarray(task.condition_of(demo), dtype=float)
-        expected = np.asarray(task.conditions).shape[1:]
+        if given is None:
+            return np.asarray(task.test_point_of(demo), dtype=float)
+        expected = np.asarray(task.test_points).shape[1:]
         try:
-            cond = np.asarray(condition, dtype=float)
+            point = np.asarray(given, dtype=float)
         except (TypeError, ValueError, OverflowError):
-            cond = np.full(0, np.nan)
-        if cond.shape != expected or not np.all(np.isfinite(cond)):
+            point = np.full(0, np.nan)
+        if point.shape != expected or not np.all(np.isfinite(point)):
             raise InvalidParameterError(
-                f"condition must be a finite array of shape {expected} like the rows of "
-                f"task.conditions, got {condition!r}"
+                f"point must be a finite array of shape {expected} like the rows of "
+                f"task.test_points, got {given!r}"
             )
-        return cond
+        return point
 
-    def _evaluate(self, learner, demos, conds, selected, replayed=False):
+    def _evaluate(self, learner, demos, demo_points, selected, replayed=False):
         task, thr = self.task, self.thresholds
-        conditions = task.conditions
-        context = task.criteria_context(demos, np.array(conds))
-        mean, _ = learner.reproduce_batch(task.frame_batch(conditions), task.times)
-        verdict = task.judge(mean, conditions, context)
+        points = task.test_points
+        context = task.criteria_context(demos, np.array(demo_points))
+        mean, _ = learner.reproduce_batch(task.frame_batch(points), task.times)
+        verdict = task.judge(mean, points, context)
         demo = demos[-1]
-        own = task.judge_demo(demo, conds[-1], context)
+        own = task.judge_demo(demo, demo_points[-1], context)
         m = len(demos)
         eps = efficacy(verdict.passed)
         previous = self._history[-1].efficacy if self._history else 0.0
         delta = eps - previous
         sim, nearest = similarity(demo, demos[:-1])
         ok = [r.demo_passed for r in self._history] + [bool(own.passed[0])]
-        correct = [c for c, good in zip(conds, ok, strict=True) if good]
+        correct = [c for c, good in zip(demo_points, ok, strict=True) if good]
         demonstrated = (
             task.demonstrated(np.array(correct))
             if correct
-            else np.zeros(len(conditions), dtype=bool)
+            else np.zeros(len(points), dtype=bool)
         )
         undemonstrated = ~verdict.passed & ~demonstrated
         if self.policy.adaptive and not replayed:
-            selected = self._adaptive_picks(learner, conds, mean, verdict.passed)
-        shown = self._shown(conds[-1], selected)
+            selected = self._adaptive_picks(learner, demo_points, mean, verdict.passed)
+        shown = self._shown(demo_points[-1], selected)
         delta_a = thr.ambiguity_distance
         if delta_a is None:
             delta_a = task.ambiguity_distance
@@ -380,7 +380,7 @@ class TeachingSession:
             format_distance=task.format_distance,
         )
         missing = undemonstrated_warning(
-            undemonstrated, task.condition_noun, task.condition_noun_plural, task.describe_where
+            undemonstrated, task.point_noun, task.point_noun_plural, task.describe_where
         )
         if missing is not None:
             warnings.append(missing)
@@ -404,15 +404,15 @@ class TeachingSession:
         )
         return record, mean
 
-    def _adaptive_picks(self, learner, conds, realisations, passed) -> np.ndarray:
+    def _adaptive_picks(self, learner, points, realisations, passed) -> np.ndarray:
         """The selector's k picks after this demo (``"adaptive"`` mode)."""
         context = SelectionContext.of_task(
-            self.task, conds, learner, realisations=realisations, passed=passed, rng=self.rng
+            self.task, points, learner, realisations=realisations, passed=passed, rng=self.rng
         )
         return self.selector(self.k, context)
 
-    def _shown(self, condition, selected) -> np.ndarray:
+    def _shown(self, point, selected) -> np.ndarray:
         """r for this step, from the feedback policy (:mod:`tutor.framework.feedback`)."""
         policy = self.policy
-        own = self.task.nearest_condition(condition) if policy.uses_own else -1
-        return policy.shown(len(self.task.conditions), own, self.batch, selected)
+        own = self.task.nearest_test_point(point) if policy.uses_own else -1
+        return policy.shown(len(self.task.test_points), own, self.batch, selected)

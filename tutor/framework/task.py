@@ -2,9 +2,11 @@ r"""What a task must supply to the teaching framework.
 
 Sena & Howard, section "Learning and Teaching Framework": a task defines the
 task space B through success criteria, and an objective approximation B^ of it
-through a finite set of test conditions. A *condition* is whatever selects one
-way of doing the task (a start point in the maze, a plant in pick-and-place);
-the framework only ever handles conditions as rows of an array.
+through a finite set of test points. A *test point* is whatever selects one
+way of doing the task (a start point in the maze, a plant in pick-and-place; the
+paper's "task condition"); the framework only ever handles test points as rows of an
+array. "Condition" in this package always means an experiment's feedback condition
+(NF, VF, ...: :mod:`tutor.framework.protocol`).
 
 The framework never names a particular task: everything task-specific goes
 through this interface.
@@ -47,7 +49,7 @@ class Reason:
     obstacle : int or None
         0-based index of the obstacle hit (the task names it: :meth:`Task.obstacle_name`).
     plant, chosen : int or None
-        Test-condition indices: the one grabbed and the one meant ("wrong_plant").
+        Test-point indices: the one grabbed and the one meant ("wrong_plant").
     """
 
     kind: str
@@ -85,9 +87,9 @@ class Task(ABC):
     name: str = "task"
     #: distance (in the task's units) below which a demo counts as similar (delta_a)
     ambiguity_distance: float = 0.0
-    #: what one test condition is called in messages ("start point", "plant")
-    condition_noun: str = "test condition"
-    condition_noun_plural: str = "test conditions"
+    #: what one test point is called in messages ("start point", "plant")
+    point_noun: str = "test point"
+    point_noun_plural: str = "test points"
 
     def __deepcopy__(self, memo):
         # A task is a fixed definition (geometry, criteria, robot models), shared by
@@ -98,12 +100,12 @@ class Task(ABC):
         """A distance in the task's units, in words for a trainee."""
         return f"{distance:.3g}"
 
-    def condition_name(self, index: int) -> str:
-        """Test condition ``index`` (0-based) in words ("start point 3")."""
-        return f"{self.condition_noun} {int(index) + 1}"
+    def point_name(self, index: int) -> str:
+        """Test point ``index`` (0-based) in words ("start point 3")."""
+        return f"{self.point_noun} {int(index) + 1}"
 
     def scripted_demo(self, index: int, rng) -> np.ndarray:
-        """A careful scripted recording for test condition ``index`` (raw, as a hand gives
+        """A careful scripted recording for test point ``index`` (raw, as a hand gives
         it), for banks of demos the lookahead chooses from."""
         raise InvalidParameterError(
             f"the task {self.name!r} has no scripted demonstrations: give it a "
@@ -127,8 +129,8 @@ class Task(ABC):
                     at=at,
                     distance="" if r.distance is None else self.format_distance(r.distance),
                     obstacle="" if r.obstacle is None else self.obstacle_name(r.obstacle),
-                    plant="" if r.plant is None else self.condition_name(r.plant),
-                    chosen="" if r.chosen is None else self.condition_name(r.chosen),
+                    plant="" if r.plant is None else self.point_name(r.plant),
+                    chosen="" if r.chosen is None else self.point_name(r.chosen),
                 )
             )
         return listing(parts)
@@ -143,8 +145,8 @@ class Task(ABC):
 
     @property
     @abstractmethod
-    def conditions(self) -> np.ndarray:
-        """B^: the test conditions, shape (n_conditions, n_condition_params)."""
+    def test_points(self) -> np.ndarray:
+        """B^: the test points, shape (n_conditions, point_dim)."""
 
     @property
     @abstractmethod
@@ -152,22 +154,22 @@ class Task(ABC):
         """Times at which realisations are produced, shape (T,)."""
 
     @abstractmethod
-    def frames(self, condition) -> list[Frame]:
+    def frames(self, point) -> list[Frame]:
         """The task frames of one condition."""
 
-    def frame_batch(self, conditions) -> FrameBatch:
+    def frame_batch(self, points) -> FrameBatch:
         """Frames of many conditions; override for speed."""
-        return FrameBatch.from_frames([self.frames(c) for c in np.asarray(conditions)])
+        return FrameBatch.from_frames([self.frames(c) for c in np.asarray(points)])
 
     @abstractmethod
     def preprocess(self, raw) -> np.ndarray:
         """Turn a raw recording into a demo (T, 1 + d), or raise InvalidDemoError."""
 
     @abstractmethod
-    def condition_of(self, demo: np.ndarray) -> np.ndarray:
+    def test_point_of(self, demo: np.ndarray) -> np.ndarray:
         """The condition a (preprocessed) demo was given under."""
 
-    def criteria_context(self, demos, conditions):
+    def criteria_context(self, demos, points):
         """Anything the criteria derive from the demo set (e.g. thresholds); default None.
 
         Parameters
@@ -178,28 +180,28 @@ class Task(ABC):
         return None
 
     @abstractmethod
-    def judge(self, trajectories: np.ndarray, conditions: np.ndarray, context=None) -> Verdict:
+    def judge(self, trajectories: np.ndarray, points: np.ndarray, context=None) -> Verdict:
         """Apply the success criteria to trajectories (B, T, d) meant for conditions (B, c).
 
         ``context`` is what :meth:`criteria_context` returned for the current demos.
         """
 
-    def judge_demo(self, demo: np.ndarray, condition, context=None) -> Verdict:
+    def judge_demo(self, demo: np.ndarray, point, context=None) -> Verdict:
         """Whether a demo (T, 1 + d) is a correct example for ``condition`` (b in B)."""
-        return self.judge(demo[None, :, 1:], np.asarray(condition)[None], context)
+        return self.judge(demo[None, :, 1:], np.asarray(point)[None], context)
 
-    def nearest_condition(self, condition) -> int:
-        """Index in B^ of the test condition closest to ``condition`` (for replays)."""
-        gap = np.asarray(self.conditions, float) - np.asarray(condition, float)
+    def nearest_test_point(self, point) -> int:
+        """Index in B^ of the test point closest to ``condition`` (for replays)."""
+        gap = np.asarray(self.test_points, float) - np.asarray(point, float)
         return int(np.argmin(np.linalg.norm(gap.reshape(len(gap), -1), axis=1)))
 
     @abstractmethod
-    def demonstrated(self, demo_conditions: np.ndarray) -> np.ndarray:
-        """Mask (n_conditions,) of the test conditions that the demos' conditions cover."""
+    def demonstrated(self, demo_points: np.ndarray) -> np.ndarray:
+        """Mask (n_conditions,) of the test points that the demos' conditions cover."""
 
     @abstractmethod
     def describe_where(self, mask: np.ndarray) -> str:
-        """Plain words for where the masked test conditions lie ("mostly bottom left")."""
+        """Plain words for where the masked test points lie ("mostly bottom left")."""
 
     @abstractmethod
     def make_learner(self) -> TPGMM:

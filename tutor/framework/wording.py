@@ -95,7 +95,7 @@ def listing(parts) -> str:
 #: How each kind of failure reason (:class:`tutor.framework.task.Reason`) is said. The
 #: slots: ``{at}`` (" at sample k of n", or nothing when sample numbers are left out),
 #: ``{distance}`` (in the task's units), ``{obstacle}``, ``{plant}`` and ``{chosen}``
-#: (the task's names of two test conditions).
+#: (the task's names of two test points).
 REASON_WORDS = {
     "start": "did not start in the start zone",
     "obstacle": "hit {obstacle}{at}",

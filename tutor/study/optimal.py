@@ -108,7 +108,7 @@ def _steady_stroke(task, index: int, rng) -> np.ndarray:
 
     traits = DEFAULT_POPULATION.sample(np.random.default_rng(0))
     steady = dataclasses.replace(traits, motor_noise=DEFAULT_POPULATION.motor_low)
-    return MazeTeacher(steady, task).stroke(task.conditions[index], rng)
+    return MazeTeacher(steady, task).stroke(task.test_points[index], rng)
 
 
 #: task name -> the careful hand of its optimal teacher, where it is not the task's own
@@ -157,11 +157,11 @@ def _whole(value, name: str, lowest: int, highest: int | None = None) -> int:
 def _pairs_from(first: int, ordered: bool) -> np.ndarray:
     """eps of every pair starting with bank demo ``first`` (nan where not a pair)."""
     task, bank = lookahead.shared()
-    state, _, _ = State.empty(task).added(task, bank.demos[first], bank.conditions[first])
+    state, _, _ = State.empty(task).added(task, bank.demos[first], bank.demo_points[first])
     out = np.full(len(bank), np.nan)
     for j in range(len(bank)) if ordered else range(first + 1, len(bank)):
         if j != first:
-            out[j] = efficacy_after(task, state, bank.demos[j], bank.conditions[j])[0]
+            out[j] = efficacy_after(task, state, bank.demos[j], bank.demo_points[j])[0]
     return out
 
 
@@ -208,7 +208,7 @@ def greedy(task, bank: Bank, cap: int = 10, target: float = 1.0, workers=None) -
             if not path:
                 best_single = choice.efficacy
             state, eps, _ = state.added(
-                task, bank.demos[choice.position], bank.conditions[choice.position]
+                task, bank.demos[choice.position], bank.demo_points[choice.position]
             )
             path.append(choice.position)
             effs.append(eps)
@@ -269,7 +269,7 @@ def pair_bound(task, bank: Bank, workers=None) -> PairBound:
     table = np.array(rows)
     filled = np.where(np.isnan(table), -np.inf, table)
     i, j = np.unravel_index(int(np.argmax(filled)), filled.shape)  # first in row order
-    singles = State.empty(task).added(task, bank.demos[i], bank.conditions[i])[1]
+    singles = State.empty(task).added(task, bank.demos[i], bank.demo_points[i])[1]
     reaching = {t: int(np.sum(filled >= t - EPS_TOL)) for t in TARGETS}
     return PairBound(
         ordered,
@@ -360,7 +360,7 @@ def task_reference(
     return {
         "experiment": experiment,
         "rule": RULES[experiment],
-        "n_conditions": int(len(task.conditions)),
+        "n_conditions": int(len(task.test_points)),
         "bank": {"conditions": int(len(np.unique(bank.index))), "draws": draws, "size": len(bank)},
         "greedy": {**found.to_dict(), "session_efficacy": _replayed(task, bank, found)},
         "pairs": pairs.to_dict(),
@@ -374,7 +374,7 @@ def _replayed(task, bank: Bank, found: GreedyResult) -> list[float]:
 
     session = TeachingSession(task, feedback="none")
     return [
-        round(session.add_demo(bank.demos[p], condition=bank.conditions[p]).efficacy, 6)
+        round(session.add_demo(bank.demos[p], point=bank.demo_points[p]).efficacy, 6)
         for p in found.positions
     ]
 

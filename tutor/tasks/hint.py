@@ -6,13 +6,13 @@ careful demonstration raises efficacy :math:`\varepsilon` the most once added, c
 exactly as the session would. To stay well within a second in a notebook kernel,
 on one core and without forking worker processes, the lookahead is pruned:
 
-- **the bank** is one careful scripted demo per condition (``make_bank(task, draws=1)``,
+- **the bank** is one careful scripted demo per test point (``make_bank(task, draws=1)``,
   about 0.2 s), made once per task object and kept (:func:`hint_bank`);
 - **with no demo yet** the hint is the optimal teacher's first greedy pick, read from
   its bundled reference (:mod:`tutor.tasks.optimal_reference`): nothing is computed;
-- **after a demo** the candidates are the :data:`HINT_CANDIDATES` conditions with the
+- **after a demo** the candidates are the :data:`HINT_CANDIDATES` test points with the
   highest frame-disagreement score (:class:`tutor.framework.selectors.FrameDisagreement`,
-  where the frames disagree or far from every demo; a demonstrated condition scores 0,
+  where the frames disagree or far from every demo; a demonstrated test point scores 0,
   so it comes last), and the hint is the best of them by lookahead (ties: the higher
   score first).
 
@@ -42,7 +42,7 @@ from .optimal_reference import optimal_reference
 
 __all__ = ["Hint", "HINT_CANDIDATES", "hint_bank", "hint_candidates", "next_demo_hint"]
 
-#: how many conditions the hint's lookahead scores (see the module docstring)
+#: how many test points the hint's lookahead scores (see the module docstring)
 HINT_CANDIDATES = 12
 
 #: the hint's bank of each task object (made on first use, dropped with the task)
@@ -56,7 +56,7 @@ class Hint:
     Attributes
     ----------
     plant : int
-        The condition to demonstrate next (an index into B^: a plant on the tray).
+        The test point to demonstrate next (an index into B^: a plant on the tray).
     efficacy : float
         eps the robot would reach with a careful demo there (the lookahead's; with no
         demo yet, the optimal teacher's eps after its first demo).
@@ -71,7 +71,7 @@ class Hint:
 
 
 def hint_bank(task) -> Bank:
-    """One careful scripted demo per condition of ``task`` (made once per task, kept)."""
+    """One careful scripted demo per test point of ``task`` (made once per task, kept)."""
     try:
         bank = _BANKS.get(task)
     except TypeError:  # a task that cannot be weakly referenced: made each time
@@ -87,7 +87,7 @@ def _session_of(state):
 
 
 def hint_candidates(task, session, n: int = HINT_CANDIDATES) -> np.ndarray:
-    """The ``n`` conditions the hint's lookahead scores after at least one demo.
+    """The ``n`` test points the hint's lookahead scores after at least one demo.
 
     The highest frame-disagreement scores
     (:meth:`~tutor.framework.selectors.FrameDisagreement.scores`), highest first (ties:
@@ -107,7 +107,7 @@ def hint_candidates(task, session, n: int = HINT_CANDIDATES) -> np.ndarray:
             "first (with none, the hint is the optimal teacher's first pick)"
         )
     context = SelectionContext.of_task(
-        task, session.conditions, session.learner, realisations=session.realisations
+        task, session.demo_points, session.learner, realisations=session.realisations
     )
     score = FrameDisagreement().scores(context)
     return np.argsort(-score, kind="stable")[: int(n)]
@@ -118,7 +118,7 @@ def _first_pick(task) -> tuple[int, float] | None:
     reference = optimal_reference(task.name)
     if reference is None or not reference.picks or not reference.greedy:
         return None
-    if reference.n_conditions != len(task.conditions):
+    if reference.n_conditions != len(task.test_points):
         return None
     return int(reference.picks[0]), float(reference.greedy[0])
 
@@ -127,7 +127,7 @@ def next_demo_hint(task, session, n: int = HINT_CANDIDATES) -> Hint:
     """The hint for the next demo of ``session`` (a TeachingSession or a run).
 
     No demo yet: the optimal teacher's first pick (from its bundled reference; for a
-    task it does not fit, the lookahead over the ``n`` farthest-point conditions).
+    task it does not fit, the lookahead over the ``n`` farthest-point test points).
     Otherwise: :func:`~tutor.tasks.lookahead.best_next` over :func:`hint_candidates`
     with the :func:`hint_bank`, on this process alone (``workers=1``).
     """
@@ -137,12 +137,12 @@ def next_demo_hint(task, session, n: int = HINT_CANDIDATES) -> Hint:
         first = _first_pick(task)
         if first is not None:
             return Hint(first[0], first[1], time.perf_counter() - started)
-        context = SelectionContext(np.asarray(task.conditions), np.zeros((0, 1)))
+        context = SelectionContext(np.asarray(task.test_points), np.zeros((0, 1)))
         candidates = FarthestPoint()(n, context)
     else:
         candidates = hint_candidates(task, session, n)
     bank = hint_bank(task)
-    # the bank holds one demo per condition in B^'s order: position = condition index
+    # the bank holds one demo per test point in B^'s order: position = test point index
     positions = np.searchsorted(bank.index, candidates)
     best = best_next(task, State.from_session(session), bank, positions, workers=1)
     return Hint(best.index, best.efficacy, time.perf_counter() - started)

@@ -44,7 +44,7 @@ __all__ = [
     "EPS_TOL",
 ]
 
-#: how many tries a careful hand gets to make a correct bank demo for one condition
+#: how many tries a careful hand gets to make a correct bank demo for one test point
 MAX_TRIES = 5
 #: exact efficacies compare equal within this (eps is a share of at most a few hundred)
 EPS_TOL = 1e-12
@@ -55,14 +55,14 @@ EPS_TOL = 1e-12
 
 @dataclass(frozen=True)
 class Bank:
-    """Candidate demonstrations: several careful draws for each condition of B^.
+    """Candidate demonstrations: several careful draws for each test point of B^.
 
     Attributes
     ----------
     demos : ndarray (n, T, 1 + d)
         Preprocessed demos (``task.preprocess``), in bank order.
-    conditions : ndarray (n, c)
-        The condition each demo was given under (a row of ``task.conditions``).
+    demo_points : ndarray (n, c)
+        The test point each demo was given for (a row of ``task.test_points``).
     index : ndarray of int (n,)
         Its index in B^.
     draw : ndarray of int (n,)
@@ -70,7 +70,7 @@ class Bank:
     """
 
     demos: np.ndarray
-    conditions: np.ndarray
+    demo_points: np.ndarray
     index: np.ndarray
     draw: np.ndarray
 
@@ -80,7 +80,7 @@ class Bank:
     def subset(self, keep) -> Bank:
         """The bank demos at positions ``keep`` (in that order)."""
         keep = np.asarray(keep, dtype=int)
-        return Bank(self.demos[keep], self.conditions[keep], self.index[keep], self.draw[keep])
+        return Bank(self.demos[keep], self.demo_points[keep], self.index[keep], self.draw[keep])
 
     def first_draws(self, n_draws: int = 1) -> Bank:
         """The demos of the first ``n_draws`` draws only (the pair bound's bank)."""
@@ -88,17 +88,17 @@ class Bank:
 
 
 def scripted_recording(task, index: int, rng) -> np.ndarray:
-    """A careful scripted recording for condition ``index``, made by the task itself
+    """A careful scripted recording for test point ``index``, made by the task itself
     (:meth:`~tutor.framework.task.Task.scripted_demo`): the maze's reference path with
     2 mm of hand jitter, pick-and-place's kinesthetic hand with no mistake."""
     return task.scripted_demo(index, rng)
 
 
 def make_bank(task, draws: int = 3, seed: int = 0, indices=None, recording=None) -> Bank:
-    """The bank: ``draws`` careful demos for each condition (all of B^ by default).
+    """The bank: ``draws`` careful demos for each test point (all of B^ by default).
 
     Each demo is drawn with its own generator, seeded by (seed, index, draw, try), so a
-    bank of fewer conditions or draws holds the same demos as the full one. A draw that
+    bank of fewer test points or draws holds the same demos as the full one. A draw that
     is not a correct demo (``task.judge_demo``) is drawn again (at most ``MAX_TRIES``).
     ``recording(task, index, rng)`` makes one raw recording (default
     :func:`scripted_recording`).
@@ -107,33 +107,33 @@ def make_bank(task, draws: int = 3, seed: int = 0, indices=None, recording=None)
     ------
     InvalidParameterError
         ``draws`` or ``seed`` is not a whole number (>= 1, >= 0), an index is outside
-        B^, or a careful teacher could not make a correct demo for a condition.
+        B^, or a careful teacher could not make a correct demo for a test point.
     """
     draws, seed = _whole(draws, "draws", 1), _whole(seed, "seed", 0)
     recording = scripted_recording if recording is None else recording
-    n = len(task.conditions)
+    n = len(task.test_points)
     idx = np.arange(n) if indices is None else np.asarray(indices, dtype=int).ravel()
     if idx.size == 0 or np.any((idx < 0) | (idx >= n)):
         raise InvalidParameterError(f"bank indices must be in 0..{n - 1}, got {idx.tolist()}")
-    demos, conds, index, draw = [], [], [], []
+    demos, points, index, draw = [], [], [], []
     for k in range(draws):
         for i in idx:
             demo = _correct_demo(task, recording, int(i), seed, k)
             demos.append(demo)
-            conds.append(task.conditions[i])
+            points.append(task.test_points[i])
             index.append(int(i))
             draw.append(k)
-    return Bank(np.array(demos), np.array(conds, dtype=float), np.array(index), np.array(draw))
+    return Bank(np.array(demos), np.array(points, dtype=float), np.array(index), np.array(draw))
 
 
 def _correct_demo(task, recording, i: int, seed: int, k: int) -> np.ndarray:
     for attempt in range(MAX_TRIES):
         rng = np.random.default_rng(np.random.SeedSequence([seed, i, k, attempt]))
         demo = task.preprocess(recording(task, i, rng))
-        if task.judge_demo(demo, task.conditions[i]).passed[0]:
+        if task.judge_demo(demo, task.test_points[i]).passed[0]:
             return demo
     raise InvalidParameterError(
-        f"a careful teacher made no correct demo for {task.condition_noun} {i} in "
+        f"a careful teacher made no correct demo for {task.point_noun} {i} in "
         f"{MAX_TRIES} tries: check the task's geometry and criteria"
     )
 
@@ -148,22 +148,22 @@ def _whole(value, name: str, lowest: int) -> int:
 
 
 def realise(task, learner) -> np.ndarray:
-    """R^: the learner's mean realisation from every condition of B^, (n, T, d)
-    (``learner.reproduce_batch`` under ``task.frame_batch(task.conditions)``, as the
+    """R^: the learner's mean realisation from every test point of B^, (n, T, d)
+    (``learner.reproduce_batch`` under ``task.frame_batch(task.test_points)``, as the
     session computes it)."""
-    return learner.reproduce_batch(task.frame_batch(task.conditions), task.times)[0]
+    return learner.reproduce_batch(task.frame_batch(task.test_points), task.times)[0]
 
 
 @dataclass
 class State:
-    """What the session knows before the next demo: its demos, conditions and learner.
+    """What the session knows before the next demo: its demos, test points and learner.
 
     ``learner`` is the one fitted on ``demos`` (a fresh one before any demo); adding a
     demo fits a copy of it, as :meth:`TeachingSession.add_demo` does.
     """
 
     demos: list
-    conditions: list
+    demo_points: list
     learner: object
 
     @classmethod
@@ -174,16 +174,16 @@ class State:
     def from_session(cls, session) -> State:
         """The state of a :class:`~tutor.framework.TeachingSession` (or a run's session)."""
         session = getattr(session, "session", session)
-        return cls(session.demos, session.conditions, session.learner)
+        return cls(session.demos, session.demo_points, session.learner)
 
-    def added(self, task, demo, condition) -> tuple[State, float, np.ndarray]:
+    def added(self, task, demo, point) -> tuple[State, float, np.ndarray]:
         """The state after ``demo``, its eps and the passed mask (n,)."""
-        eps, passed, learner = efficacy_after(task, self, demo, condition)
-        return State([*self.demos, demo], [*self.conditions, condition], learner), eps, passed
+        eps, passed, learner = efficacy_after(task, self, demo, point)
+        return State([*self.demos, demo], [*self.demo_points, point], learner), eps, passed
 
 
-def efficacy_after(task, state: State, demo, condition):
-    """eps after adding ``demo`` (preprocessed) under ``condition`` to ``state``.
+def efficacy_after(task, state: State, demo, point):
+    """eps after adding ``demo`` (preprocessed) under ``test point`` to ``state``.
 
     Exactly the session's eps (:meth:`TeachingSession.add_demo`): a copy of the learner
     refitted on every demo, R^ judged by the task's criteria with the demos' context.
@@ -195,31 +195,31 @@ def efficacy_after(task, state: State, demo, condition):
     learner : the fitted copy
     """
     demos = [*state.demos, demo]
-    conds = np.array([*state.conditions, condition], dtype=float)
+    points = np.array([*state.demo_points, point], dtype=float)
     learner = copy.deepcopy(state.learner)
-    learner.fit(demos, [task.frames(c) for c in conds])
-    context = task.criteria_context(demos, conds)
+    learner.fit(demos, [task.frames(c) for c in points])
+    context = task.criteria_context(demos, points)
     passed = judged(task, realise(task, learner), context)
     return float(passed.mean()), passed, learner
 
 
 def judged(task, trajectories, context) -> np.ndarray:
-    """``task.judge(trajectories, task.conditions, context).passed``, sooner.
+    """``task.judge(trajectories, task.test_points, context).passed``, sooner.
 
     A task whose criterion (i) follows the arm (``task.feasibility``, pick-and-place) is
     judged first without it, then with it only where every other criterion holds: a
     realisation is in B iff it meets them all, so the mask is the same, but the arm's
     inverse kinematics run only for the realisations they can decide.
     """
-    conditions = task.conditions
+    points = task.test_points
     if getattr(task, "feasibility", None) is None:
-        return task.judge(trajectories, conditions, context).passed
+        return task.judge(trajectories, points, context).passed
     lenient = copy.copy(task)  # shallow: the same scene, without criterion (i)'s arm
     lenient.feasibility = None
-    passed = np.array(lenient.judge(trajectories, conditions, context).passed, dtype=bool)
+    passed = np.array(lenient.judge(trajectories, points, context).passed, dtype=bool)
     if passed.any():
         rows = np.flatnonzero(passed)
-        passed[rows] = task.judge(trajectories[rows], conditions[rows], context).passed
+        passed[rows] = task.judge(trajectories[rows], points[rows], context).passed
     return passed
 
 
@@ -232,7 +232,7 @@ _SHARED: dict = {}
 def _score_positions(state: State, positions) -> list[float]:
     """eps after each bank demo at ``positions`` (a worker's share)."""
     task, bank = _SHARED["task"], _SHARED["bank"]
-    return [efficacy_after(task, state, bank.demos[i], bank.conditions[i])[0] for i in positions]
+    return [efficacy_after(task, state, bank.demos[i], bank.demo_points[i])[0] for i in positions]
 
 
 def shared():
@@ -318,9 +318,9 @@ class NextDemo:
     position : int
         Its position in the bank (``bank.demos[position]``).
     index : int
-        Its condition's index in B^ (the start point or plant to demonstrate).
+        Its test point's index in B^ (the start point or plant to demonstrate).
     draw : int
-        Which of the bank's draws for that condition it is.
+        Which of the bank's draws for that test point it is.
     efficacy : float
         eps after adding it (the session's eps).
     scores : ndarray (k,)
@@ -350,9 +350,9 @@ def best_next(
     state : State, TeachingSession or run
         The current demos and learner (:meth:`State.from_session` for a session or a run).
     bank : Bank
-        The candidates (e.g. :func:`make_bank`, or one draw per condition for speed).
+        The candidates (e.g. :func:`make_bank`, or one draw per test point for speed).
     candidates : sequence of int, optional
-        Bank positions to consider (default: all), e.g. the failing conditions only.
+        Bank positions to consider (default: all), e.g. the failing test points only.
     scorer : Scorer, optional
         An open :class:`Scorer` for this task and bank (its worker processes are reused).
     workers : int, optional

@@ -9,7 +9,7 @@ I
 beta
     Target, a circle of 0.5 cm diameter.
 B^
-    The objective approximation of the task space: one test condition per point
+    The objective approximation of the task space: one test point per point
     of a 20 x 7 grid over I (|B^| = 140).
 
 A state is :math:`\xi = (t, x, y)` with normalised time t in [0, 1]; positions
@@ -200,16 +200,16 @@ class MazeTask(Task):
     # All admissible paths share the route after the first gap, so whole demos are
     # on average only ~1 cm apart even from distant starts; 6 mm marks real repeats.
     ambiguity_distance = 0.006
-    condition_noun = "start point"
-    condition_noun_plural = "start points"
+    point_noun = "start point"
+    point_noun_plural = "start points"
     #: a recorded stroke shorter than this (m) is junk, not a demonstration
     min_path_length = 0.02
 
     def __init__(self, layout: MazeLayout | None = None):
         self.layout = load_layout() if layout is None else layout
         self._times = np.linspace(0.0, 1.0, self.layout.n_samples)
-        self._conditions = self.layout.test_starts
-        self._batch = self.layout.frame_batch(self._conditions)
+        self._test_points = self.layout.test_starts
+        self._batch = self.layout.frame_batch(self._test_points)
         nx, ny = self.layout.grid_shape
         z, m = self.layout.start_zone, self.layout.grid_margin
         self._half_cell = np.array(
@@ -217,20 +217,20 @@ class MazeTask(Task):
         )
 
     @property
-    def conditions(self) -> np.ndarray:
-        return self._conditions
+    def test_points(self) -> np.ndarray:
+        return self._test_points
 
     @property
     def times(self) -> np.ndarray:
         return self._times
 
-    def frames(self, condition) -> list[Frame]:
-        return self.layout.frames(condition)
+    def frames(self, point) -> list[Frame]:
+        return self.layout.frames(point)
 
-    def frame_batch(self, conditions) -> FrameBatch:
-        if conditions is self._conditions:
+    def frame_batch(self, points) -> FrameBatch:
+        if points is self._test_points:
             return self._batch
-        return self.layout.frame_batch(conditions)
+        return self.layout.frame_batch(points)
 
     def make_learner(self) -> TPGMM:
         return TPGMM(self.layout.n_components, warm_start=True)
@@ -244,9 +244,9 @@ class MazeTask(Task):
     def scripted_demo(self, index: int, rng) -> np.ndarray:
         """:meth:`MazeLayout.reference_path` from start point ``index`` with
         :data:`SCRIPTED_JITTER` of hand jitter on its guide points."""
-        return self.layout.reference_path(self.conditions[index], rng, jitter=SCRIPTED_JITTER)
+        return self.layout.reference_path(self.test_points[index], rng, jitter=SCRIPTED_JITTER)
 
-    def condition_of(self, demo: np.ndarray) -> np.ndarray:
+    def test_point_of(self, demo: np.ndarray) -> np.ndarray:
         return np.asarray(demo)[0, 1:3]
 
     # ---------------------------------------------------------------- demos
@@ -290,7 +290,7 @@ class MazeTask(Task):
 
     # ---------------------------------------------------------------- criteria
 
-    def judge(self, trajectories: np.ndarray, conditions=None, context=None) -> Verdict:
+    def judge(self, trajectories: np.ndarray, points=None, context=None) -> Verdict:
         """Criteria (i)-(iii) for trajectories (B, T, 2), with the reason for each failure."""
         traj = np.asarray(trajectories, dtype=float)
         lay = self.layout
@@ -322,10 +322,10 @@ class MazeTask(Task):
 
     # ---------------------------------------------------------------- coverage
 
-    def demonstrated(self, demo_conditions) -> np.ndarray:
+    def demonstrated(self, demo_points) -> np.ndarray:
         """Grid points within half a grid cell (in x and in y) of a demo's start."""
-        starts = np.asarray(demo_conditions, dtype=float).reshape(-1, 2)
-        gap = np.abs(self._conditions[:, None, :] - starts[None, :, :])  # (n, m, 2)
+        starts = np.asarray(demo_points, dtype=float).reshape(-1, 2)
+        gap = np.abs(self._test_points[:, None, :] - starts[None, :, :])  # (n, m, 2)
         return np.any(np.all(gap <= self._half_cell * (1 + 1e-9), axis=2), axis=1)
 
     def describe_where(self, mask) -> str:
@@ -335,7 +335,7 @@ class MazeTask(Task):
             return "everywhere in the start zone"
         if mask.mean() >= 0.8:
             return "almost everywhere in the start zone"
-        pts = self._conditions[mask]
+        pts = self._test_points[mask]
         if pts.size == 0:
             return "nowhere"
         z = self.layout.start_zone

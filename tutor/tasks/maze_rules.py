@@ -58,7 +58,7 @@ def advise(task, session, radius: float = RULE_RADIUS) -> RuleAdvice:
     record = session.latest
     if record is None:
         return advise_from(task, None, None, radius)
-    return advise_from(task, record.passed, task.condition_of(session.demos[0]), radius)
+    return advise_from(task, record.passed, task.test_point_of(session.demos[0]), radius)
 
 
 def advise_from(task, passed, first_start, radius: float = RULE_RADIUS) -> RuleAdvice:
@@ -70,7 +70,7 @@ def advise_from(task, passed, first_start, radius: float = RULE_RADIUS) -> RuleA
         return RuleAdvice(
             1, None, radius, "Rule 1: give one demonstration, starting anywhere in the start zone."
         )
-    starts = task.conditions
+    starts = task.test_points
     passed = np.asarray(passed, dtype=bool)
     first = np.asarray(first_start, dtype=float)
     near_first = np.linalg.norm(starts - first, axis=1) <= radius

@@ -64,7 +64,7 @@ class MazeRun(TeachingRun):
 
     def _rule_followed(self, demo) -> bool | None:
         rule = self._rule_in_force
-        return None if rule is None else followed(rule, self.task.condition_of(demo))
+        return None if rule is None else followed(rule, self.task.test_point_of(demo))
 
     def study_columns(self) -> dict:
         """``followed_rules``: the share of demos that followed VR's rule (NaN in a

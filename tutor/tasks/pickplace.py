@@ -3,7 +3,7 @@ r"""Experiment 2 of Sena & Howard: pick a plant from a 10 x 10 tray and drop it 
 Section "Experiment 2" of the paper. Notation:
 
 B^
-    One test condition per plant (|B^| = 100); a condition is the plant's index.
+    One test point per plant (|B^| = 100); a condition is the plant's index.
 X
     The admissible space: the gripper path is reachable (inverse kinematics
     succeeds) without self-collision or collision with the table, tray or bin.
@@ -183,8 +183,8 @@ class PickPlaceTask(Task):
     """
 
     name = "pickplace"
-    condition_noun = "plant"
-    condition_noun_plural = "plants"
+    point_noun = "plant"
+    point_noun_plural = "plants"
     ambiguity_distance = 0.01
     #: a recording whose gripper path is shorter than this (m) is junk
     min_path_length = 0.05
@@ -194,8 +194,8 @@ class PickPlaceTask(Task):
         self.feasibility = self._feasibility(feasibility)
         self.start = start_position(self.scene)
         self._times = np.linspace(0.0, 1.0, self.scene.n_samples)
-        self._conditions = self.scene.plant_positions
-        self._batch = self.frame_batch(self._conditions)
+        self._test_points = self.scene.plant_positions
+        self._batch = self.frame_batch(self._test_points)
 
     def _feasibility(self, how):
         from ..robot import FullCheck, MapCheck, default_map, get_arm, scene_obstacles
@@ -219,26 +219,26 @@ class PickPlaceTask(Task):
         return how
 
     @property
-    def conditions(self) -> np.ndarray:
-        return self._conditions
+    def test_points(self) -> np.ndarray:
+        return self._test_points
 
     @property
     def times(self) -> np.ndarray:
         return self._times
 
-    def frames(self, condition) -> list[Frame]:
+    def frames(self, point) -> list[Frame]:
         eye = np.eye(4)
         pad = [0.0]
         return [
             Frame(eye, np.r_[self.start, pad]),
-            Frame(eye, np.r_[np.asarray(condition, float), pad]),
+            Frame(eye, np.r_[np.asarray(point, float), pad]),
             Frame(eye, np.r_[self.scene.release_point, pad]),
         ]
 
-    def frame_batch(self, conditions) -> FrameBatch:
-        if conditions is getattr(self, "_conditions", None) and hasattr(self, "_batch"):
+    def frame_batch(self, points) -> FrameBatch:
+        if points is getattr(self, "_test_points", None) and hasattr(self, "_batch"):
             return self._batch
-        plants = np.asarray(conditions, float).reshape(-1, 3)
+        plants = np.asarray(points, float).reshape(-1, 3)
         B = plants.shape[0]
         b = np.zeros((B, 3, 4))
         b[:, 0, :3] = self.start
@@ -254,18 +254,18 @@ class PickPlaceTask(Task):
     def format_distance(self, distance: float) -> str:
         return f"{100 * distance:.1f} cm"
 
-    def condition_of(self, demo) -> np.ndarray:
+    def test_point_of(self, demo) -> np.ndarray:
         """The plant nearest to where the hand first closes (when no choice was recorded)."""
         demo = np.asarray(demo)
         k = _first(demo[:, 4] >= GRAB_LEVEL)
         grab = demo[k if k >= 0 else len(demo) // 2, 1:4]
-        return self._conditions[self.nearest_condition(grab)].copy()
+        return self._test_points[self.nearest_test_point(grab)].copy()
 
     def plant_name(self, index: int) -> str:
         r, c = divmod(int(index), self.scene.cols)
         return f"plant ({r + 1}, {c + 1})"
 
-    def condition_name(self, index: int) -> str:
+    def point_name(self, index: int) -> str:
         return self.plant_name(index)
 
     # ---------------------------------------------------------------- demos
@@ -329,17 +329,18 @@ class PickPlaceTask(Task):
         release = np.where(grab >= 0, _first(~after), -1)
         return grab, release
 
-    def criteria_context(self, demos, conditions) -> dict:
+    def criteria_context(self, demos, points) -> dict:
         """delta_g and delta_r: mean demo distance + 2 std + 1 mm (right-plant demos only)."""
         traj = np.array([d[:, 1:] for d in demos])
         grab, release = self._events(traj)
         rows = np.arange(len(demos))
-        grab_d = np.linalg.norm(traj[rows, np.maximum(grab, 0), :3] - conditions, axis=1)
+        grab_d = np.linalg.norm(traj[rows, np.maximum(grab, 0), :3] - points, axis=1)
         rel_d = np.linalg.norm(
             traj[rows, np.maximum(release, 0), :3] - self.scene.release_point, axis=1
         )
-        nearest = np.array([self.nearest_condition(p) for p in traj[rows, np.maximum(grab, 0), :3]])
-        own = np.array([self.nearest_condition(c) for c in conditions])
+        grabbed_at = traj[rows, np.maximum(grab, 0), :3]
+        nearest = np.array([self.nearest_test_point(p) for p in grabbed_at])
+        own = np.array([self.nearest_test_point(c) for c in points])
         use_g = (grab >= 0) & (nearest == own)
         use_r = release >= 0
 
@@ -349,7 +350,7 @@ class PickPlaceTask(Task):
 
         return {"delta_g": rule(grab_d, use_g), "delta_r": rule(rel_d, use_r)}
 
-    def judge(self, trajectories, conditions, context=None) -> Verdict:
+    def judge(self, trajectories, points, context=None) -> Verdict:
         traj = np.asarray(trajectories, float)
         ctx = context or {"delta_g": 0.01, "delta_r": 0.02}
         pos = traj[..., :3]
@@ -365,7 +366,7 @@ class PickPlaceTask(Task):
             first_bad = self.feasibility.first_outside(pos, traj[..., 3], known_bad=bad)
         grab, release = self._events(traj)
         rows = np.arange(len(traj))
-        grab_d = np.linalg.norm(pos[rows, np.maximum(grab, 0)] - conditions, axis=1)
+        grab_d = np.linalg.norm(pos[rows, np.maximum(grab, 0)] - points, axis=1)
         rel_d = np.linalg.norm(pos[rows, np.maximum(release, 0)] - sc.release_point, axis=1)
         path_ok = first_bad == n
         grab_ok = (grab >= 0) & (grab_d <= ctx["delta_g"])
@@ -389,19 +390,19 @@ class PickPlaceTask(Task):
             causes[i] = tuple(parts)
         return self.verdict(passed, causes)
 
-    def judge_demo(self, demo, condition, context=None) -> Verdict:
+    def judge_demo(self, demo, point, context=None) -> Verdict:
         """A demo is correct when it grabs the chosen plant and releases over the bin."""
         traj = np.asarray(demo)[None, :, 1:]
         grab, release = self._events(traj)
         sc = self.scene
-        chosen = self.nearest_condition(condition)
+        chosen = self.nearest_test_point(point)
         parts = []
         if (traj[0, :, 2] < 0.0).any():
             parts.append(Reason("table"))
         if grab[0] < 0:
             parts.append(Reason("no_grab"))
         else:
-            grabbed = self.nearest_condition(traj[0, grab[0], :3])
+            grabbed = self.nearest_test_point(traj[0, grab[0], :3])
             off = np.linalg.norm(traj[0, grab[0], :3] - sc.plant_positions[grabbed])
             if grabbed != chosen:
                 parts.append(Reason("wrong_plant", plant=int(grabbed), chosen=int(chosen)))
@@ -418,10 +419,10 @@ class PickPlaceTask(Task):
 
     # ---------------------------------------------------------------- coverage
 
-    def demonstrated(self, demo_conditions) -> np.ndarray:
-        mask = np.zeros(len(self._conditions), dtype=bool)
-        for c in np.asarray(demo_conditions, float).reshape(-1, 3):
-            mask[self.nearest_condition(c)] = True
+    def demonstrated(self, demo_points) -> np.ndarray:
+        mask = np.zeros(len(self._test_points), dtype=bool)
+        for c in np.asarray(demo_points, float).reshape(-1, 3):
+            mask[self.nearest_test_point(c)] = True
         return mask
 
     def describe_where(self, mask) -> str:

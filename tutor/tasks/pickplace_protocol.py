@@ -293,7 +293,7 @@ class PickPlaceRun(TeachingRun):
         """Seconds of the robot's attempts the condition shows after each demo (RF 25, BF
         125, AF 25 k, NF and SF 0: SF's tests are asked for and paid for one by one). The
         oracle selector may show fewer than k (only failures): this is then the most."""
-        n = len(self.task.conditions)
+        n = len(self.task.test_points)
         adaptive = min(self.k, n) if self.policy.adaptive else 0
         shown = {"replay": 1, "batch": len(self.batch()), "adaptive": adaptive}
         shown = shown.get(self.feedback, 0)
@@ -473,7 +473,7 @@ class PickPlaceRun(TeachingRun):
         followed = self._followed_hint(plant) if self.hinted else None
         return self.add_demo(
             raw,
-            condition=self.task.conditions[plant],
+            point=self.task.test_points[plant],
             seconds=seconds,
             followed_rule=followed,
             chosen_by=chosen_by,
@@ -563,8 +563,8 @@ class PickPlaceRun(TeachingRun):
         )
         return super().undo(spent_seconds=spent)
 
-    def check_plant(self, plant) -> int:
-        n = len(self.task.conditions)
+    def _check_plant(self, plant) -> int:
+        n = len(self.task.test_points)
         if isinstance(plant, bool):
             raise InvalidParameterError(f"a plant is a number from 0 to {n - 1}, got {plant!r}")
         try:

@@ -93,7 +93,7 @@ class MazeTeacher:
         zone, margin = task.layout.start_zone, 0.001
         lower = np.array([zone.x0 + margin, zone.y0 + margin])
         upper = np.array([zone.x1 - margin, zone.y1 - margin])
-        model = TeacherModel(t, rng, task.conditions, lower, upper, "maze")
+        model = TeacherModel(t, rng, task.test_points, lower, upper, "maze")
         run = MazeRun.new(
             condition, task, trainee=SIMULATED, clock=simulated_clock, **adaptive
         )
@@ -119,7 +119,7 @@ class MazeTeacher:
             session = run.session
             if first_start is None:
                 first_start = np.asarray(start, float)
-            own = task.nearest_condition(start)
+            own = task.nearest_test_point(start)
             model.belief.demonstrate(own)
             model.belief.observe(record.shown, record.passed[record.shown])
             if model.satisfied(m + 1):

@@ -5,7 +5,7 @@ can do, :math:`\tilde R = \omega(r, Q)`, from the realisations r they are shown 
 their human factors Q, and chooses the next demonstration
 :math:`b_{m+1} = \Omega(\tilde R, \tilde B, b_m, Q)`.
 
-The simulated teacher's :math:`\tilde R` is a belief, per test condition of B^, that the
+The simulated teacher's :math:`\tilde R` is a belief, per test point of B^, that the
 robot succeeds there (:class:`Belief`). It is built by the same rules in every
 condition (the rules are in :meth:`Belief.estimate`):
 
@@ -72,7 +72,7 @@ class Belief:
     Parameters
     ----------
     points : ndarray (n, 2)
-        Where the test conditions of B^ lie, in the task's units (metres).
+        Where the test points of B^ lie, in the task's units (metres).
     width : float
         The width of B^ in the same units (distances are taken relative to it).
     enough_demos : int
@@ -173,7 +173,7 @@ class TeacherModel:
     rng : numpy Generator
         The teacher's own randomness (hand, aim, slips, plan).
     points : ndarray (n, 2)
-        Where the test conditions lie (task units).
+        Where the test points lie (task units).
     lower, upper : array-like (2,)
         Corners of the region the teacher may start demos in (task units).
     task : {"maze", "pickplace"}

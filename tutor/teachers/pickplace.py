@@ -80,7 +80,7 @@ class PickPlaceTeacher:
     # ---------------------------------------------------------------- teaching
 
     def _model(self, rng) -> TeacherModel:
-        plants = self.task.conditions[:, :2]
+        plants = self.task.test_points[:, :2]
         lo, hi = plants.min(axis=0), plants.max(axis=0)
         return TeacherModel(self.traits, rng, plants, lo, hi, "pickplace")
 

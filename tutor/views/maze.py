@@ -8,7 +8,7 @@ private helpers.)
 Notation, as in :mod:`tutor.framework`:
 
 B^
-    The objective approximation of the task space: the test conditions, here a
+    The objective approximation of the task space: the test points, here a
     20 x 7 grid of start points over the start zone I (|B^| = 140).
 R^
     The realisations: one reproduction of the learnt model from every start
@@ -198,7 +198,7 @@ def _step_index(session, step):
 
 
 def realisations_at(session, step=-1):
-    """R^ after a given demo: the realisations from every test condition.
+    """R^ after a given demo: the realisations from every test point.
 
     Parameters
     ----------
@@ -308,7 +308,7 @@ def plot_feedback(session, ax=None, step=-1, reveal=False):
         return ax
     record = session.history[i]
     demos = session.demos[: i + 1]
-    n = len(task.conditions)
+    n = len(task.test_points)
     shown = np.asarray(record.shown, dtype=int)
     passed = np.asarray(record.passed, dtype=bool)
     everything = np.array_equal(np.unique(shown), np.arange(n))
@@ -323,8 +323,8 @@ def plot_feedback(session, ax=None, step=-1, reveal=False):
             _draw_realisations(ax, mean, passed, rest, linewidth=0.5, alpha=0.3, zorder=1)
             _draw_realisations(ax, mean, passed, shown, linewidth=1.8, alpha=1.0, zorder=2)
             ax.plot(
-                task.conditions[shown, 0],
-                task.conditions[shown, 1],
+                task.test_points[shown, 0],
+                task.test_points[shown, 1],
                 "o",
                 markersize=4.5,
                 markerfacecolor="white",
@@ -609,7 +609,7 @@ def plot_grid_status(session, ax=None, step=-1):
             zorder=0,
         )
     )
-    grid = task.conditions
+    grid = task.test_points
     n = len(grid)
     i = _step_index(session, step)
     if i is None:

@@ -152,7 +152,7 @@ class MazeTutor(TutorApp):
                 "you could have finished."
             )
         if not self.run.attempt.demos[-1].followed_rule:
-            start = self.task.condition_of(self.session.demos[-1])
+            start = self.task.test_point_of(self.session.demos[-1])
             gap = np.linalg.norm(start - advice.center)
             return (
                 f"Demo {n_demos} did not follow rule {advice.rule}: it started "

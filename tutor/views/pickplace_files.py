@@ -37,19 +37,19 @@ def plant_items(run, demos, name: str) -> list:
     """
     task = run.task
     items = []
-    width = task.conditions.shape[1]
-    for i, (raw, meant) in enumerate(zip(demos, demos.conditions, strict=True), start=1):
+    width = task.test_points.shape[1]
+    for i, (raw, meant) in enumerate(zip(demos, demos.demo_points, strict=True), start=1):
         try:
             if meant is not None and np.asarray(meant).shape != (width,):
                 raise InvalidFileError(
                     f"its condition has {np.asarray(meant).size} number(s); a plant's "
                     f"grasp point has {width} (x, y, z in metres), or write null"
                 )
-            where = task.condition_of(task.preprocess(raw)) if meant is None else meant
+            where = task.test_point_of(task.preprocess(raw)) if meant is None else meant
             plant = plant_at(task, where, meant is not None)
         except TutorError as exc:
             raise InvalidFileError(f"demo {i} of {name}: {exc}") from exc
-        items.append((raw, {"condition": task.conditions[plant], "seconds": task.duration(raw)}))
+        items.append((raw, {"point": task.test_points[plant], "seconds": task.duration(raw)}))
     total = sum(o["seconds"] for _, o in items)
     if total > run.remaining:
         raise InvalidFileError(
@@ -64,9 +64,9 @@ def plant_at(task, where, meant: bool) -> int:
     """The plant whose grasp point is ``where`` (a meant condition must lie within
     half a plant spacing of one, in all three coordinates)."""
     where = np.asarray(where, dtype=float)
-    plant = int(task.nearest_condition(where))
+    plant = int(task.nearest_test_point(where))
     if meant:
-        grasp = task.conditions
+        grasp = task.test_points
         gap = float(np.linalg.norm(where - grasp[plant]))
         pitch = float(task.scene.pitch)
         if gap > pitch / 2:

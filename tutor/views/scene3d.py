@@ -194,7 +194,7 @@ class Scene3D(GuidingMixin, SceneWidgetMixin):
             from ..tasks.pickplace import PickPlaceTask
 
             task = PickPlaceTask()
-        if not (hasattr(task, "scene") and hasattr(task, "conditions")):
+        if not (hasattr(task, "scene") and hasattr(task, "test_points")):
             raise InvalidParameterError(
                 f"task must be a PickPlaceTask (with a scene and conditions), got {task!r}"
             )
@@ -228,7 +228,7 @@ class Scene3D(GuidingMixin, SceneWidgetMixin):
         import meshcat
 
         self.vis = meshcat.Visualizer(window=self.recorder)
-        self._status = np.full(len(task.conditions), "", dtype=object)
+        self._status = np.full(len(task.test_points), "", dtype=object)
         self._robot = robot_meshes(self.scene.robot) if robot else None
         self._arm = None
         self._widget = None
@@ -241,7 +241,7 @@ class Scene3D(GuidingMixin, SceneWidgetMixin):
         self.replay_button = None
         self._guide: Guide | None = None
         self._draw_static_scene()  # streams to this scene on the live server as drawn
-        self.set_status(np.full(len(task.conditions), "unknown", dtype=object))
+        self.set_status(np.full(len(task.test_points), "unknown", dtype=object))
         self._check_live()
 
     # ------------------------------------------------------------------ building
@@ -306,7 +306,7 @@ class Scene3D(GuidingMixin, SceneWidgetMixin):
         import meshcat.transformations as tf
 
         s = np.asarray(status, dtype=object).ravel()
-        n = len(self.task.conditions)
+        n = len(self.task.test_points)
         if s.shape != (n,):
             raise InvalidParameterError(f"status must have {n} entries, got shape {s.shape}")
         bad = sorted({str(v) for v in s if v not in STATUS_COLOURS})

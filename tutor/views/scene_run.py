@@ -51,7 +51,7 @@ def run_picture(run) -> RunPicture:
     shown = np.zeros(0, int)
     if rec is not None:  # what the trainee may see: the run decides, as for the tray
         vis = run.visibility()
-        shown = np.arange(len(task.conditions)) if vis.everything else vis.shown
+        shown = np.arange(len(task.test_points)) if vis.everything else vis.shown
     R = session.realisations if rec is not None else None
     ok = [p for p in shown if rec.passed[p]] if rec is not None else []
     bad = [p for p in shown if not rec.passed[p]] if rec is not None else []
@@ -71,7 +71,7 @@ def run_picture(run) -> RunPicture:
         )
         animation = (R[plant][:, -4:], label, PASS if passed else FAIL)
     elif demos:
-        plant = task.nearest_condition(session.conditions[-1])
+        plant = task.nearest_test_point(session.demo_points[-1])
         label = f"Your demonstration {len(demos)} ({task.plant_name(plant)})."
         animation = (demos[-1], label, DEMO)
     return RunPicture(trails, animation)
@@ -90,7 +90,7 @@ def pick_plant(run, shown):
     tests = tests_after(run, rec.n_demos)
     if tests and tests[-1].plants:
         return int(tests[-1].plants[-1])
-    own = run.task.nearest_condition(run.session.conditions[-1])
+    own = run.task.nearest_test_point(run.session.demo_points[-1])
     if own in set(int(p) for p in rec.shown):
         return int(own)
     failing = [int(p) for p in shown if not rec.passed[p]]

@@ -45,9 +45,9 @@ __all__ = [
     "new_axes",
 ]
 
-PASS = "#53a846"  #: realisation in B (meets the criteria), covered test condition
+PASS = "#53a846"  #: realisation in B (meets the criteria), covered test point
 FAIL = "#661a05"  #: realisation not in B (fails the criteria)
-UNDEMONSTRATED = "#9e8ddb"  #: failing test condition that no correct demo covers
+UNDEMONSTRATED = "#9e8ddb"  #: failing test point that no correct demo covers
 DEMO = "#013ad1"  #: the teacher's demonstrations b
 INCORRECT = "#821652"  #: incorrect demonstration marker
 AMBIGUOUS = "#eed12c"  #: ambiguous demonstration marker

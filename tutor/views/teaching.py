@@ -82,7 +82,7 @@ def plot_progress(session, ax=None, target=0.9):
         color=EFFICACY_COLOUR,
         markersize=4.5,
         linewidth=1.6,
-        label="efficacy ε (share of test conditions covered)",
+        label="efficacy ε (share of test points covered)",
         gid="efficacy",
         zorder=3,
     )
@@ -287,7 +287,7 @@ def _region_poles(r_centre, b_centre):
 def plot_set_diagram(session, ax=None, step=-1):
     """The information-history-space diagram of the paper, with this session's counts.
 
-    A large ellipse is B^ (every test condition); R^ (the realisations) is an
+    A large ellipse is B^ (every test point); R^ (the realisations) is an
     ellipse of the same size that overlaps it by the covered share, so the
     picture changes as teaching goes on. Regions, as in the paper's figure:
     R ∩ B (covered, striped; most of it by generalisation), B^ \\ (R^ ∪ b)
@@ -318,7 +318,7 @@ def plot_set_diagram(session, ax=None, step=-1):
         ax.text(6, 4.7, "no demo yet", ha="center", va="center", fontsize=9, color="0.4")
         return ax
     c = set_counts(session, step)
-    noun = getattr(session.task, "condition_noun_plural", "test conditions")
+    noun = getattr(session.task, "point_noun_plural", "test points")
     r_centre, b_centre = _diagram_geometry(c)
     size = {"width": 2 * _B_HALF[0], "height": 2 * _B_HALF[1]}
     B = {"xy": tuple(_B_CENTRE), **size}

@@ -57,7 +57,7 @@ def hint_sentence(task, plant: int) -> str:
     cols = getattr(getattr(task, "scene", None), "cols", None)
     if cols:
         r, c = divmod(int(plant), cols)
-        where = f"{task.condition_noun} row {r + 1}, column {c + 1}"
+        where = f"{task.point_noun} row {r + 1}, column {c + 1}"
     else:
         where = _name(task, plant)
     return f"The robot would learn most from {where} next ({HINT_GLYPH} on the tray map)."
@@ -65,7 +65,7 @@ def hint_sentence(task, plant: int) -> str:
 
 def _name(task, index: int) -> str:
     namer = getattr(task, "plant_name", None)
-    return namer(index) if namer is not None else f"{task.condition_noun} {index + 1}"
+    return namer(index) if namer is not None else f"{task.point_noun} {index + 1}"
 
 
 def _did(task, record, vis, n_demos: int) -> str:
@@ -76,7 +76,7 @@ def _did(task, record, vis, n_demos: int) -> str:
         change = "" if n_demos == 1 else f", {100 * record.delta:+.0f} points"
         return (
             f"After demo {n_demos} the robot succeeds from {k} of the {n} "
-            f"{task.condition_noun_plural} (efficacy ε = {record.efficacy:.0%}{change})."
+            f"{task.point_noun_plural} (efficacy ε = {record.efficacy:.0%}{change})."
         )
     shown = [int(i) for i in vis.shown]
     if not shown:
@@ -89,7 +89,7 @@ def _did(task, record, vis, n_demos: int) -> str:
         verdict = "succeeds" if record.passed[i] else f"fails: {why}"
         return f"The robot tried {_name(task, i)}: it {verdict}."
     text = (
-        f"The robot tried {len(shown)} {task.condition_noun_plural}: {len(ok)} "
+        f"The robot tried {len(shown)} {task.point_noun_plural}: {len(ok)} "
         f"succeed{'s' if len(ok) == 1 else ''}"
     )
     if bad:
@@ -163,7 +163,7 @@ def _next(task, record, vis, *, rule_message: str | None, first_reached: bool) -
     if any(w.kind in (INCORRECT, AMBIGUOUS) for w in record.warnings):
         return []  # the warning above already says what to do next (undo, move away)
     if first_reached:
-        return [f"{TARGET:.0%} of the {task.condition_noun_plural} succeed: you may finish."]
+        return [f"{TARGET:.0%} of the {task.point_noun_plural} succeed: you may finish."]
     if record.efficacy >= TARGET:
         return []
     for w in record.warnings:
@@ -205,7 +205,7 @@ def compose(
         The run is over: only what the robot now does is said (the score follows it).
     """
     if record is None:
-        noun = task.condition_noun
+        noun = task.point_noun
         first = f"No demonstration yet: show the robot the task once, from any {noun}."
         return [rule_message or first]
     earlier = [r for r in history if r.n_demos < record.n_demos]
@@ -250,12 +250,12 @@ def finish_summary(run, paper: float, statistic: str, condition: str | None = No
             f"{plural(s.n_demos, 'demonstration', 'demonstrations')}"
             if s.reached
             else f"{TARGET:.0%} was not reached; after all {s.n_demos} demonstrations the "
-            f"robot succeeds from {s.efficacy:.0%} of the {run.task.condition_noun_plural}"
+            f"robot succeeds from {s.efficacy:.0%} of the {run.task.point_noun_plural}"
         )
     else:
         how = (
             f"after {plural(s.n_demos, 'demonstration', 'demonstrations')} the robot "
-            f"succeeds at {s.efficacy:.0%} of the {run.task.condition_noun_plural}"
+            f"succeeds at {s.efficacy:.0%} of the {run.task.point_noun_plural}"
         )
     text = (
         f"{how[0].upper()}{how[1:]}: your teaching efficiency is η = {percent(s.efficiency)} "
@@ -283,7 +283,7 @@ def optimal_sentence(task, n_demos: int | None = None) -> str:
     goal = (
         f"to reach {ref.coverage:.0%}"
         if ref.coverage < 1
-        else f"to succeed at every one of the {len(task.conditions)} {task.condition_noun_plural}"
+        else f"to succeed at every one of the {len(task.test_points)} {task.point_noun_plural}"
     )
     fewest = "the fewest this robot needs" if ref.is_proven else "the fewest found"
     head = f"{fewest} {goal} is {ref.n_demos}"
@@ -319,7 +319,7 @@ def summary(record, starts: str = "") -> str:
     if back:
         lines.append(f"- {_how_to_take_back(back, starts)}")
     if not record.warnings:
-        lines.append("- No failures: every test condition succeeds or was demonstrated.")
+        lines.append("- No failures: every test point succeeds or was demonstrated.")
     return "\n".join(lines)
 
 

@@ -47,7 +47,7 @@ def tray_status(run: PickPlaceRun, reveal: bool = False) -> np.ndarray:
     Only the plants the condition showed (r, and the plants tested) get pass or fail;
     ``reveal`` (or a finished or practice run) shows every plant.
     """
-    status = np.full(len(run.task.conditions), "unknown", dtype=object)
+    status = np.full(len(run.task.test_points), "unknown", dtype=object)
     rec = run.session.latest
     if rec is None:
         return status

@@ -219,7 +219,7 @@ def _pickplace_frames(axes, condition: str) -> None:
     run.demonstrate(second, rng=rng)
     revealed = _status(run, reveal=True)
 
-    demo_only = np.full(len(task.conditions), "unknown", dtype=object)
+    demo_only = np.full(len(task.test_points), "unknown", dtype=object)
     demo_only[first] = "demo"
     _tray(axes[0], task, demo_only, f"1. You demonstrate {task.plant_name(first)}")
     caption = (spec.example or "2. What the robot shows you").format(
