@@ -60,6 +60,9 @@ class Hand:
         What the trainee reads, e.g. "Guide the arm yourself".
     words : str
         One sentence for the trainee: who moves the arm and how.
+    trainee_moves : bool
+        The trainee moves the arm in the 3-D view (the own hand); otherwise the tutor
+        moves it to the plant the trainee clicked (the guided hand).
     mistake_menu : bool
         Whether the "mistake" menu (wrong plant, sloppy grab) is offered: only the
         guided hand makes mistakes on request; an own hand makes its own.
@@ -74,6 +77,7 @@ class Hand:
     code: str
     label: str
     words: str
+    trainee_moves: bool
     mistake_menu: bool
     controls: tuple[tuple[str, tuple[str, ...], str], ...]
     try_it: str
@@ -103,6 +107,7 @@ HANDS = {
             "gripper to the plant, close the hand on it, carry it to the bin, open the hand "
             "and press Enter."
         ),
+        trainee_moves=True,
         mistake_menu=False,
         controls=(
             ("drag the ball on the gripper", (), "move the hand across the table"),
@@ -127,6 +132,7 @@ HANDS = {
             "The tutor guides the arm for you: select a plant and press Demonstrate, and "
             "the arm is moved to it as a person would move it."
         ),
+        trainee_moves=False,
         mistake_menu=True,
         controls=(
             ("click a plant on the tray map", (), "choose the plant to demonstrate"),

@@ -211,7 +211,7 @@ class PickPlaceTutor(TutorApp):
     def _hand_for(hand, scene3d) -> tuple[str, str]:
         """The hand this tutor uses, and a note when it cannot be the one asked for."""
         code = choose_hand(explicit=hand)
-        if code == "own" and not callable(getattr(scene3d, "start_guide", None)):
+        if HANDS[code].trainee_moves and not callable(getattr(scene3d, "start_guide", None)):
             note = (
                 ""
                 if hand is None and scene3d is None  # a tray-only tutor: nothing to guide in
@@ -246,7 +246,7 @@ class PickPlaceTutor(TutorApp):
             self._guide_plant = None
             self.controller.say("Guiding cancelled: nothing was recorded and no time was used.")
             return
-        if self.hand != "own":
+        if not HANDS[self.hand].trainee_moves:
             raise InvalidParameterError(
                 "this tutor uses the guided hand: click a plant, then Demonstrate"
             )
@@ -409,7 +409,7 @@ class PickPlaceTutor(TutorApp):
         for i, plant in enumerate(plants):
             if self.run.finished:
                 break
-            if self.hand == "own":
+            if HANDS[self.hand].trainee_moves:
                 self.guide_as_steady_hand(plant)
             else:
                 self.demonstrate(plant, mistake=mistakes.get(i))
