@@ -80,6 +80,13 @@ _IN_USE = (
 )
 
 
+def _nothing_loaded(exc: TutorError) -> TutorError:
+    """``exc``, marked as a refused load that already says "Nothing was loaded" (a page
+    that reports it reads the mark, not the words)."""
+    exc.nothing_loaded = True
+    return exc
+
+
 def _check_path(path, what: str = "run_file") -> str:
     """``path`` as text, or InvalidParameterError saying what is wrong with it."""
     problem = check_file_name(path)
@@ -572,10 +579,10 @@ class RunController:
             return
         problem = check_file_name(path)
         if problem is not None:
-            raise InvalidFileError(
+            raise _nothing_loaded(InvalidFileError(
                 f"Nothing was loaded: {problem}. Choose a .json or .csv file with the Load "
                 "button, or give its path as text."
-            )
+            ))
         path = Path(path)
         shown = path.name if name is None else name
         try:
@@ -585,7 +592,7 @@ class RunController:
             if shown != path.name:  # the readers name the stored file: name the trainee's
                 why = why.replace(path.name, shown)
             why = why if why.endswith((".", "!", "?")) else why + "."
-            raise type(exc)(
+            raise _nothing_loaded(type(exc)(
                 f"Nothing was loaded from {shown}: {why} This run and its file are unchanged."
-            ) from exc
+            )) from exc
         self.autosave()

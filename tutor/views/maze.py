@@ -84,8 +84,7 @@ def _target_circle(layout, zorder: float) -> Circle:
 
 
 def _short_name(box, default):
-    name = box.name or default
-    return name.split(" (")[0]
+    return box.label or box.name or default
 
 
 def draw_maze(ax=None, layout=None, zone_label=True):

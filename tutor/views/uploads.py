@@ -153,8 +153,8 @@ def on_upload(
         except SaveError as exc:  # the upload, or the tutor's autosave, could not be written
             report(str(exc))
         except TutorError as exc:
-            text = str(exc)
-            report(text if text.startswith("Nothing was loaded") else f"Nothing was loaded: {text}")
+            said = getattr(exc, "nothing_loaded", False)  # the controller's refusal says it
+            report(str(exc) if said else f"Nothing was loaded: {exc}")
         except OSError as exc:  # the temporary folder could not be made
             report(f"Nothing was loaded: {shown} could not be stored for reading ({exc.strerror}).")
 
