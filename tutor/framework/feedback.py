@@ -13,15 +13,15 @@ policy     r after each demo                                        totals
 ========== ======================================================= ===========
 none       nothing (NF)                                             no
 all        every realisation, :math:`r = \hat R` (VF, VR)            yes
-replay     the realisation for the demo's own condition (RF)        no
+replay     the realisation for the demo's own test point (RF)       no
 batch      a fixed subset of :math:`\hat B` (BF: 4 corners, centre)  no
-selected   the conditions the teacher asks for (SF)                 no
-adaptive   k conditions a selector picks after each demo (AF)       no
+selected   the test points the teacher asks for (SF)                no
+adaptive   k test points a selector picks after each demo (AF)      no
 ========== ======================================================= ===========
 
 The first five are the paper's. ``adaptive`` is beyond it (the paper's open question:
 choosing r automatically): the selectors of :mod:`tutor.framework.selectors` pick k
-conditions of :math:`\hat B` from the demos and the learner, e.g. where the frames'
+test points of :math:`\hat B` from the demos and the learner, e.g. where the frames'
 regressions disagree most,
 
 .. math::
@@ -63,8 +63,8 @@ class FeedbackPolicy:
     """One way of choosing r (see the module's table); a subclass per policy.
 
     ``shown(n, own, batch, selected)`` gives r as indices into B^: ``n`` = |B^|, ``own``
-    the index of the demo's own condition (-1 when the policy does not use it, see
-    :attr:`uses_own`), ``batch`` the fixed subset, ``selected`` the conditions asked for
+    the index of the demo's own test point (-1 when the policy does not use it, see
+    :attr:`uses_own`), ``batch`` the fixed subset, ``selected`` the test points asked for
     (SF) or picked by the selector (adaptive).
 
     Class attributes say what else the policy decides: whether the totals may be shown,
@@ -77,7 +77,7 @@ class FeedbackPolicy:
     #: efficacy, its change, efficiency and the undemonstrated count may be shown
     totals: bool = False
     description: str = ""
-    #: r is the demo's own condition (the session finds its index)
+    #: r is the demo's own test point (the session finds its index)
     uses_own: bool = False
     #: r is the fixed batch, which the run must give
     needs_batch: bool = False
@@ -87,7 +87,7 @@ class FeedbackPolicy:
     keeps_picks: bool = False
     #: nothing is shown while the teacher teaches (NF, HF)
     silent: bool = False
-    #: the teacher chooses which conditions the robot tries (SF)
+    #: the teacher chooses which test points the robot tries (SF)
     teacher_picks: bool = False
 
     def shown(self, n: int, own: int, batch, selected) -> np.ndarray:
@@ -112,7 +112,7 @@ class AllFeedback(FeedbackPolicy):
 
 class ReplayFeedback(FeedbackPolicy):
     name, uses_own = "replay", True
-    description = "the demo's own condition replayed (RF)"
+    description = "the demo's own test point replayed (RF)"
 
     def shown(self, n, own, batch, selected):
         return np.asarray([own], dtype=int)
@@ -120,7 +120,7 @@ class ReplayFeedback(FeedbackPolicy):
 
 class BatchFeedback(FeedbackPolicy):
     name, needs_batch = "batch", True
-    description = "a fixed batch of conditions after every demo (BF)"
+    description = "a fixed batch of test points after every demo (BF)"
 
     def shown(self, n, own, batch, selected):
         return np.asarray(batch, dtype=int).ravel().copy()
@@ -128,7 +128,7 @@ class BatchFeedback(FeedbackPolicy):
 
 class SelectedFeedback(FeedbackPolicy):
     name, keeps_picks, teacher_picks = "selected", True, True
-    description = "the conditions the teacher asks for (SF)"
+    description = "the test points the teacher asks for (SF)"
 
     def shown(self, n, own, batch, selected):
         return np.asarray(selected, dtype=int).ravel().copy()
@@ -136,7 +136,7 @@ class SelectedFeedback(FeedbackPolicy):
 
 class AdaptiveFeedback(SelectedFeedback):
     name, adaptive, teacher_picks = "adaptive", True, False
-    description = "k conditions a selector picks after every demo (AF)"
+    description = "k test points a selector picks after every demo (AF)"
 
 
 #: the policies by name (the paper's five, then adaptive)
@@ -170,7 +170,7 @@ class Visibility:
     Attributes
     ----------
     shown : ndarray of int
-        The conditions of B^ whose realisation (and its pass/fail and reason) is shown.
+        The test points of B^ whose realisation (and its pass/fail and reason) is shown.
     totals : bool
         Whether efficacy, its change, efficiency and the undemonstrated count over all
         of B^ may be shown.
@@ -188,7 +188,7 @@ class Visibility:
 
 def reveal(policy: str, n: int, shown, finished: bool = False, practice: bool = False):
     """The :class:`Visibility` of a step: ``shown`` is r for ``policy`` (plus tests asked
-    for); after the run, or in a practice run, every condition and every total."""
+    for); after the run, or in a practice run, every test point and every total."""
     if finished or practice:
         return Visibility(np.arange(n), True, True)
     chosen = FEEDBACK_POLICIES[policy]

@@ -1,6 +1,6 @@
 r"""Teaching metrics of Sena & Howard (section "Evaluating Teaching").
 
-Notation: B^ the test points, R^ the realisations from every condition,
+Notation: B^ the test points, R^ the realisations from every test point,
 b the demonstration set with M = |b| demos.
 
 - Teaching efficacy :math:`\varepsilon = |R^ \cap B^| / |B^|` in [0, 1]: the share of

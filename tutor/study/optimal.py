@@ -5,7 +5,7 @@ Sena & Howard score a teacher by efficacy :math:`\varepsilon` and efficiency
 reach. This module answers it for the tutor's own learner, tasks and criteria with a
 **machine teacher** that knows everything the tutor knows:
 
-- a **bank** of candidate demos (:func:`make_bank`): one per condition of B^ (the 140
+- a **bank** of candidate demos (:func:`make_bank`): one per test point of B^ (the 140
   maze start points, the 100 plants) and several draws of a careful teacher's hand each,
   made by the tasks' own generators (the maze stroke of
   :meth:`tutor.teachers.maze.MazeTeacher.stroke` at the population's steadiest hand;
@@ -18,7 +18,7 @@ reach. This module answers it for the tutor's own learner, tasks and criteria wi
   can call it too;
 - the **greedy teacher** (:func:`greedy`): greedy steps until eps = 1 or a cap;
 - the **pair bound** (:func:`pair_bound`): every pair of bank demos (one draw per
-  condition; ordered pairs when the learner warm-starts, since the session's result then
+  test point; ordered pairs when the learner warm-starts, since the session's result then
   depends on the order), so whether 2 demos could ever reach 0.9 or 1 is known rather
   than guessed.
 
@@ -117,7 +117,7 @@ CAREFUL_HANDS = {"maze": _steady_stroke}
 
 
 def careful_recording(task, index: int, rng) -> np.ndarray:
-    """A careful teacher's raw recording for condition ``index`` of ``task``.
+    """A careful teacher's raw recording for test point ``index`` of ``task``.
 
     Maze: the simulated teacher's stroke (:meth:`tutor.teachers.maze.MazeTeacher.stroke`)
     with the population's steadiest hand (``motor_low``) and no slip. Pick-and-place: the
@@ -129,12 +129,12 @@ def careful_recording(task, index: int, rng) -> np.ndarray:
 
 
 def make_bank(task, draws: int = 3, seed: int = 0, indices=None) -> Bank:
-    """The optimal teacher's bank: ``draws`` careful demos per condition (all of B^ by
+    """The optimal teacher's bank: ``draws`` careful demos per test point (all of B^ by
     default), by :func:`careful_recording`; see :func:`tutor.tasks.lookahead.make_bank`."""
     return lookahead.make_bank(task, draws, seed, indices, recording=careful_recording)
 
 
-#: the most careful demos per condition in the bank (--draws; the paper-sized reference
+#: the most careful demos per test point in the bank (--draws; the paper-sized reference
 #: uses 3, and each one more adds a pass over all of B^)
 MAX_DRAWS = 20
 #: the most demos the greedy teacher may give (--cap; it stops at the target long before)
@@ -170,7 +170,7 @@ def _pairs_from(first: int, ordered: bool) -> np.ndarray:
 
 @dataclass(frozen=True)
 class GreedyResult:
-    """The greedy teacher's path: bank positions, conditions and eps after each demo."""
+    """The greedy teacher's path: bank positions, test points and eps after each demo."""
 
     positions: tuple[int, ...]
     indices: tuple[int, ...]
@@ -234,7 +234,7 @@ class PairBound:
     ordered: bool  #: pairs in both orders (the learner warm-starts, so order matters)
     n_pairs: int
     best: float  #: the highest eps of any pair
-    best_pair: tuple[int, int]  #: its conditions' indices in B^ (first, second)
+    best_pair: tuple[int, int]  #: its test points' indices in B^ (first, second)
     best_path: tuple[float, float]  #: eps after its first demo and after both
     reaching: dict  #: target -> number of pairs reaching it
     bank_size: int
@@ -343,7 +343,7 @@ def task_reference(
 ) -> dict:
     """Everything the reference file says about one task (see :func:`compute_reference`).
 
-    ``indices`` restricts the bank to those conditions (a reduced bank, for tests);
+    ``indices`` restricts the bank to those test points (a reduced bank, for tests);
     ``log`` (e.g. ``print``) is told each phase's result and time.
     """
     draws = _whole(draws, "draws", 1, MAX_DRAWS)
@@ -395,17 +395,17 @@ def compute_reference(
     ----------
     tasks : sequence of {"maze", "pickplace"}
     draws : int
-        Careful demos per condition in the bank.
+        Careful demos per test point in the bank.
     seed : int
         Seed of the bank's hand.
     pair_draws : int
-        Draws per condition in the pair bound's bank (all pairs of it are scored).
+        Draws per test point in the pair bound's bank (all pairs of it are scored).
     cap : int
         The most demos the greedy teacher gives.
     workers : int, optional
         Processes (default: up to 2).
     indices : dict, optional
-        Task name -> the conditions of a reduced bank (tests); default all of B^.
+        Task name -> the test points of a reduced bank (tests); default all of B^.
     log : callable, optional
         Told each phase's result and time (the command prints them).
 
@@ -453,7 +453,7 @@ def main(argv=None) -> int:
         "--tasks", nargs="+", default=["maze", "pickplace"], choices=["maze", "pickplace"]
     )
     parser.add_argument(
-        "--draws", type=int, default=3, help=f"bank demos per condition (at most {MAX_DRAWS})"
+        "--draws", type=int, default=3, help=f"bank demos per test point (at most {MAX_DRAWS})"
     )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(

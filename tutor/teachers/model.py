@@ -7,17 +7,17 @@ their human factors Q, and chooses the next demonstration
 
 The simulated teacher's :math:`\tilde R` is a belief, per test point of B^, that the
 robot succeeds there (:class:`Belief`). It is built by the same rules in every
-condition (the rules are in :meth:`Belief.estimate`):
+test point (the rules are in :meth:`Belief.estimate`):
 
 1. **Prior** (Q): before any evidence, the teacher believes the robot can do the task
    everywhere once it has had ``enough_demos`` demonstrations (``enough_maze`` or
    ``enough_pickplace``), and nowhere before.
-2. **Own demos**: the robot can do what it was shown (demonstrated conditions pass).
+2. **Own demos**: the robot can do what it was shown (demonstrated test points pass).
 3. **What was seen** (r): a realisation seen passing makes the teacher believe its
    neighbours pass too (within :data:`NEAR` of the grid's width), and so does every
-   condition *between* seen successes (inside their convex hull); a realisation
+   test point *between* seen successes (inside their convex hull); a realisation
    seen failing marks its neighbourhood as failing. What was seen last wins over
-   the prior; the latest sight of a condition replaces earlier ones, and a
+   the prior; the latest sight of a test point replaces earlier ones, and a
    demonstration at a failure counts, for the teacher, as having mended it.
 
 The demonstration function (:class:`TeacherModel`) then picks where the next
@@ -59,7 +59,7 @@ def simulated_clock() -> str:
     """The stamp of every event of a simulated run: fixed, so a seed gives the same record."""
     return "2000-01-01T00:00:00.000Z"
 
-#: a success (failure) seen at one condition is believed to hold this close to it
+#: a success (failure) seen at one test point is believed to hold this close to it
 #: (fraction of the width of B^: 2.3 cm in the maze, about one plant in the tray)
 NEAR = 0.12
 #: radius of the "region" a teacher sees as one red cluster (fraction of the width)
@@ -84,17 +84,17 @@ class Belief:
         self.width = float(width)
         self.enough_demos = int(enough_demos)
         n = len(self.points)
-        #: last sight of each condition: -1 never seen, 0 seen failing, 1 seen passing
+        #: last sight of each test point: -1 never seen, 0 seen failing, 1 seen passing
         self.seen = np.full(n, -1, dtype=np.int8)
-        #: conditions the teacher has demonstrated (and not taken back)
+        #: test points the teacher has demonstrated (and not taken back)
         self.demonstrated = np.zeros(n, dtype=bool)
-        #: every condition seen failing, in the order first seen (what they may remember)
+        #: every test point seen failing, in the order first seen (what they may remember)
         self.failures_seen: list[int] = []
         gap = self.points[:, None, :] - self.points[None, :, :]
         self._near = np.linalg.norm(gap, axis=2) <= NEAR * self.width + 1e-12
 
     def demonstrate(self, index: int) -> None:
-        """The teacher demonstrated condition ``index``: failures seen near it count as fixed.
+        """The teacher demonstrated test point ``index``: failures seen near it count as fixed.
 
         (Until they see the robot again there: a demo where it failed is meant to mend it.)
         """
@@ -102,7 +102,7 @@ class Belief:
         self.seen[self._near[index] & (self.seen == 0)] = -1
 
     def observe(self, shown, passed) -> None:
-        """Remember what the robot was seen doing at the conditions ``shown``."""
+        """Remember what the robot was seen doing at the test points ``shown``."""
         shown = np.asarray(shown, dtype=int)
         passed = np.asarray(passed, dtype=bool)
         self.seen[shown] = passed.astype(np.int8)
@@ -111,7 +111,7 @@ class Belief:
                 self.failures_seen.append(int(index))
 
     def estimate(self, n_demos: int) -> np.ndarray:
-        r"""R~: bool (n,), whether the teacher believes the robot succeeds at each condition."""
+        r"""R~: bool (n,), whether the teacher believes the robot succeeds at each test point."""
         belief = np.full(len(self.points), n_demos >= self.enough_demos)
         belief |= self.demonstrated
         ok = self.seen == 1
@@ -141,7 +141,7 @@ class Belief:
     def worst_region(self, within=None) -> np.ndarray | None:
         """Where the picture looks worst: a large red region away from the demos, or None.
 
-        Each condition seen failing scores the number of failures within
+        Each test point seen failing scores the number of failures within
         :data:`CLUSTER` of it, weighted by how far it is from the nearest demo (up to
         CLUSTER away): a person goes where much is red *and* nothing was shown yet.
         Returns the centre of the failures around the best-scoring one. ``within``
@@ -194,7 +194,7 @@ class TeacherModel:
         self.upper = np.asarray(upper, dtype=float)
         self.width = float(self.upper[0] - self.lower[0])
         self.belief = Belief(self.points, self.width, enough_demos)
-        #: conditions to demonstrate first, remembered from an earlier run
+        #: test points to demonstrate first, remembered from an earlier run
         self.lessons: list[int] = []
 
     # ------------------------------------------------------------- Omega pieces
@@ -206,7 +206,7 @@ class TeacherModel:
         demonstrated; else, with chance ``repeat_rate``, one of the demos already given
         (``avoid``) again; else a point around ``plan_focus``: with ``choices`` > 1 the
         one of that many farthest from the demos given, otherwise the first (redrawn up to
-        three times if it lands on a demonstrated condition).
+        three times if it lands on a demonstrated test point).
         """
         t = self.traits
         avoid = [int(i) for i in avoid]

@@ -4,10 +4,10 @@ Notation, as in :mod:`tutor.framework`:
 
 B^
     The objective approximation of the task space B: the finite set of test
-    conditions (|B^| of them).
+    test points (|B^| of them).
 R^
-    The realisations: what the learnt model does from every condition in B^.
-    R^ ∩ B^ are the covered conditions (the realisation meets the task criteria).
+    The realisations: what the learnt model does from every test point in B^.
+    R^ ∩ B^ are the covered test points (the realisation meets the task criteria).
 b
     The demonstration set; M = |b|. Demos that fail the criteria themselves lie
     outside B (b \ B, incorrect demonstrations).
@@ -166,7 +166,7 @@ def set_counts(session, step=-1) -> dict:
     dict
         ``n`` = |B^|, ``covered`` = |R^ ∩ B^|, ``generalised`` (covered and not
         demonstrated), ``failed`` = |R^ \\ B| (realisations that fail),
-        ``demonstrated`` (conditions a correct demo covers), ``undemonstrated``,
+        ``demonstrated`` (test points a correct demo covers), ``undemonstrated``,
         ``demos`` = M, ``incorrect`` = |b \\ B| (demos failing the criteria).
     """
     history = session.history
@@ -292,7 +292,7 @@ def plot_set_diagram(session, ax=None, step=-1):
     picture changes as teaching goes on. Regions, as in the paper's figure:
     R ∩ B (covered, striped; most of it by generalisation), B^ \\ (R^ ∪ b)
     (undemonstrated, cross-hatched), R^ \\ B (realisations that fail), and the
-    demo set b, whose part inside B holds the conditions the correct demos
+    demo set b, whose part inside B holds the test points the correct demos
     cover and whose part outside B (shaded grey) the incorrect demos. Every
     region is labelled with its name and count in plain words; a region with
     no members is not drawn, but its label still says 0.
