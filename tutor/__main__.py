@@ -57,6 +57,23 @@ def _whole_number(minimum: int, maximum: int | None = None, unit: str = ""):
     return parse
 
 
+def _scheduler(text: str) -> str:
+    """An argparse type: a Dask scheduler, "auto" or tcp://HOST:PORT."""
+    from .engine import check_scheduler
+    from .errors import InvalidParameterError
+
+    try:
+        return check_scheduler(text)
+    except InvalidParameterError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+SCHEDULER_HELP = (
+    "run on a Dask cluster instead of local processes: 'auto' (a local one) or a "
+    "scheduler's address tcp://HOST:PORT (the same numbers either way)"
+)
+
+
 class _OneLineParser(argparse.ArgumentParser):
     """An argument parser whose refusal is one line (exit code 2), like the tutor's own.
 
@@ -97,6 +114,7 @@ def _parser() -> argparse.ArgumentParser:
             "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
         )
         p.add_argument("--no-progress", action="store_true", help="no progress bar")
+        p.add_argument("--scheduler", type=_scheduler, default=None, help=SCHEDULER_HELP)
 
     rep = sub.add_parser("reproduce", help="simulate one experiment and compare with the paper")
     common(rep)
@@ -137,6 +155,7 @@ def _parser() -> argparse.ArgumentParser:
     ada.add_argument(
         "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
     )
+    ada.add_argument("--scheduler", type=_scheduler, default=None, help=SCHEDULER_HELP)
     ada.add_argument(
         "--quick", action="store_true",
         help="a reduced test run (4 teachers x 1 run x 2 seeds), not a result",
@@ -167,6 +186,7 @@ def _parser() -> argparse.ArgumentParser:
     cls.add_argument(
         "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
     )
+    cls.add_argument("--scheduler", type=_scheduler, default=None, help=SCHEDULER_HELP)
     cls.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
     cls.add_argument("--no-progress", action="store_true", help="no progress bar")
     return parser
@@ -193,6 +213,7 @@ def class_command(args) -> None:
 
     result = read_class(
         args.class_folder, args.experiment, workers=args.workers, plan=args.plan,
+        scheduler=args.scheduler,
         meanwhile=load_the_rest, progress=False if args.no_progress else None,
     )
     from .study.class_report import analyse_class, format_class_report, save_class
@@ -240,7 +261,8 @@ def adaptive_command(args) -> None:
     out = check_out_dir(args.out)
     partial = out / "adaptive_partial.jsonl"  # an interrupted study resumes from it
     result = run_study(
-        plan, workers=args.workers, progress=not args.no_progress, checkpoint=partial
+        plan, workers=args.workers, progress=not args.no_progress, checkpoint=partial,
+        scheduler=args.scheduler,
     )
     save_raw(result, out)  # the simulation is kept even if the analysis fails
     analysis = analyse_study(result)
@@ -285,6 +307,7 @@ def main(argv=None) -> int:
                 n=args.n,
                 workers=args.workers,
                 progress=not args.no_progress,
+                scheduler=args.scheduler,
             )
             analysis = analyse(result)
             print(format_report(result, analysis))
@@ -297,6 +320,7 @@ def main(argv=None) -> int:
                 n=args.n,
                 workers=args.workers,
                 progress=not args.no_progress,
+                scheduler=args.scheduler,
             )
             print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
             print("\n" + robustness_summary(table))

@@ -60,7 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..workers import one_blas_thread, process_pool
+from ..engine import Engine
 from .adaptive_arm import TracedRun, arm_job, teach_policy
 from .adaptive_plan import (
     DEFAULT_POLICIES,
@@ -240,8 +240,10 @@ def run_study(
     progress: bool | Callable = True,
     settings: StudySettings = SETTINGS,
     checkpoint=None,
+    scheduler: str | None = None,
 ) -> StudyResult:
-    """Simulate the study on ``workers`` processes (default: every core).
+    """Simulate the study on ``workers`` processes (default: every core), or on a Dask
+    cluster (``scheduler``: ``"auto"`` or ``"tcp://HOST:PORT"``, :class:`tutor.engine.Engine`).
 
     The numbers depend on the plan and the seeds only, not on ``workers``, the order
     the work is done in, or a resumed ``checkpoint``.
@@ -292,14 +294,9 @@ def run_study(
             bar.update(1)
 
     try:
-        if workers == 1 or not jobs:
-            one_blas_thread()
-            for job in jobs:
-                keep(*arm_job(job))
-        else:
-            with process_pool(workers) as pool:
-                for key, rows, curve in pool.map(arm_job, jobs, chunksize=2):
-                    keep(key, rows, curve)
+        with Engine(workers, scheduler) as engine:
+            for _, (key, rows, curve) in engine.results(arm_job, jobs):
+                keep(key, rows, curve)  # each kept (and checkpointed) as it arrives
     finally:
         if bar is not None:
             bar.close()

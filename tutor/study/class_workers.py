@@ -1,7 +1,6 @@
-"""Reading the files of a class on several processes: the pool, the progress shown and
-the cache that spares a refresh the files that did not change.
+"""Reading the files of a class: the progress shown and the cache that spares a refresh
+the files that did not change (the workers are :class:`tutor.engine.Engine`'s).
 
-:class:`ReplayPool` maps a function over worker processes (or here, for one worker) in order,
 :func:`progress_bar` makes the progress callback (a tqdm bar on stderr, or the caller's own)
 and :class:`ReadMemo` keeps what :func:`.classroom.read_class` learnt about each file while
 the file's size and modification time stay the same (the dashboard's Refresh). They are
@@ -15,7 +14,6 @@ import sys
 
 from ..errors import InvalidParameterError
 from ..runtime import headless
-from ..workers import one_blas_thread, process_pool
 
 
 def progress_bar(progress):
@@ -84,45 +82,3 @@ class ReadMemo:
             for label, value in new.items():
                 self.cache[(step, label)] = (self.stamps.get(label), value)
         return [new[lab] if lab in new else self._known(lab, step) for lab in labels]
-
-
-
-class ReplayPool:
-    """``map`` over worker processes (or here, for one worker), results in order."""
-
-    def __init__(self, workers: int):
-        self.workers, self._pool = workers, None
-
-    def __enter__(self):
-        if self.workers > 1:
-            self._pool = process_pool(self.workers)
-        else:
-            one_blas_thread()
-        return self
-
-    def map(self, fn, items, meanwhile=None, step=None) -> list:
-        """``fn`` of each item; ``meanwhile()`` runs here while the workers work, and
-        ``step(n)`` after each of the n first results."""
-        if self._pool is None or len(items) < 2:
-            results = []
-            for item in items:
-                results.append(fn(item))
-                if step is not None:
-                    step(len(results))
-            if meanwhile is not None:
-                meanwhile()
-            return results
-        chunk = max(1, len(items) // (4 * self.workers))
-        pending = self._pool.map(fn, items, chunksize=chunk)  # submitted at once
-        if meanwhile is not None:
-            meanwhile()
-        results = []
-        for result in pending:
-            results.append(result)
-            if step is not None:
-                step(len(results))
-        return results
-
-    def __exit__(self, *exc):
-        if self._pool is not None:
-            self._pool.shutdown()

@@ -48,6 +48,7 @@ from pathlib import Path, PurePosixPath
 
 import pandas as pd
 
+from ..engine import Engine
 from ..errors import InvalidFileError, InvalidParameterError, LimitError, TutorError
 from ..framework.assignment import ClassPlan, load_plan
 from ..framework.protocol import EXPERIMENTS
@@ -57,7 +58,7 @@ from ..tasks import run_class
 from .class_copies import duplicate_runs, runs_apart
 from .class_files import ZIP_AGAIN, close_zips, hidden, list_class, read_run_file
 from .class_result import PROBLEMS, ClassResult, FileOutcome
-from .class_workers import ReadMemo, ReplayPool, progress_bar
+from .class_workers import ReadMemo, progress_bar
 from .cohort import StudySettings, cohort_task, rows_of
 
 __all__ = [
@@ -231,6 +232,7 @@ def read_class(
     meanwhile=None,
     cache: dict | None = None,
     progress=None,
+    scheduler: str | None = None,
 ) -> ClassResult:
     """Read and score every run record of a class (see the module docstring).
 
@@ -260,6 +262,9 @@ def read_class(
         A tqdm progress bar on stderr over the files read (default: when stderr is a
         terminal and ``TUTOR_HEADLESS`` is not set), or ``progress(done, total)`` called
         after each file.
+    scheduler : str, optional
+        Replay on a Dask cluster (``"auto"`` or ``"tcp://HOST:PORT"``, see
+        :class:`tutor.engine.Engine`) instead of local processes.
 
     Returns
     -------
@@ -305,10 +310,10 @@ def read_class(
     context = (str(path.resolve()), experiment, settings)  # a cache is for one class
     memo = ReadMemo(None if path.is_file() else cache, run_files, context)
     try:
-        with ReplayPool(workers) as pool:
+        with Engine(workers, scheduler) as engine:
             fresh = memo.todo(labels, "file")
             items = [(str(path), run_files[lab], lab, experiment, settings) for lab in fresh]
-            done = pool.map(_read, items, meanwhile, step(len(items)))
+            done = engine.map(_read, items, step=step(len(items)), meanwhile=meanwhile)
             outcomes = memo.merge(labels, "file", dict(zip(fresh, done, strict=True)))
     finally:
         close_zips()

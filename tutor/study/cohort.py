@@ -28,12 +28,12 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
+from ..engine import Engine
 from ..errors import InvalidParameterError
 from ..framework.failures import Thresholds, is_ambiguous
 from ..framework.protocol import EXPERIMENTS
@@ -41,7 +41,6 @@ from ..framework.protocol import experiment as experiment_of
 from ..tasks import make_task
 from ..teachers import TEACHERS
 from ..teachers.traits import DEFAULT_POPULATION, Population
-from ..workers import one_blas_thread, process_pool
 from .limits import MAX_SEED, MAX_TEACHERS
 
 __all__ = [
@@ -335,6 +334,11 @@ def simulate_teacher(
 # ---------------------------------------------------------------- a cohort
 
 
+def _teacher_job(job):
+    """One teacher of a cohort (a worker's job): :func:`simulate_teacher` of its args."""
+    return simulate_teacher(*job)
+
+
 def run_experiment(
     experiment: int,
     seed: int = 0,
@@ -344,6 +348,7 @@ def run_experiment(
     population: Population = DEFAULT_POPULATION,
     settings: StudySettings = StudySettings(),
     conditions=None,
+    scheduler: str | None = None,
 ) -> CohortResult:
     """Simulate a whole cohort of Experiment 1 or 2.
 
@@ -356,7 +361,7 @@ def run_experiment(
         Number of teachers (default the paper's: 30 and 36).
     workers : int, optional
         Processes to use (default: the machine's cores, at most ``n``); 1 runs in this
-        process. One task per teacher, so the cores share the work as it comes.
+        process. Teachers go to the workers in batches (:class:`tutor.engine.Engine`).
     progress : bool
         Show a tqdm progress bar (one step per teacher).
     population : Population
@@ -364,6 +369,9 @@ def run_experiment(
     conditions : sequence of str, optional
         Experiment 2's conditions (default the paper's NF, RF, BF, SF; AF may be added,
         see :func:`check_conditions`). ``n`` then defaults to 9 per condition.
+    scheduler : str, optional
+        Run on a Dask cluster: ``"auto"`` (a local one) or ``"tcp://HOST:PORT"``
+        (:class:`tutor.engine.Engine`); the same numbers as the process pool.
 
     Returns
     -------
@@ -382,31 +390,16 @@ def run_experiment(
 
         tqdm.monitor_interval = 0  # no monitor thread in a process that forks workers
         bar = tqdm(total=n, desc=f"Experiment {experiment}", unit="teacher")
-    results = {}
+    jobs = [(experiment, i, seed, n, population, settings, conditions) for i in range(n)]
     try:
-        if workers == 1:
-            one_blas_thread()
-            for i in range(n):
-                results[i] = simulate_teacher(
-                    experiment, i, seed, n, population, settings, conditions
-                )
-                if bar is not None:
-                    bar.update(1)
-        else:
-            with process_pool(workers) as pool:
-                futures = {
-                    pool.submit(
-                        simulate_teacher, experiment, i, seed, n, population, settings, conditions
-                    ): i
-                    for i in range(n)
-                }
-                for fut in as_completed(futures):
-                    results[futures[fut]] = fut.result()
-                    if bar is not None:
-                        bar.update(1)
+        with Engine(workers, scheduler) as engine:
+            taught = engine.map(
+                _teacher_job, jobs, step=None if bar is None else lambda k: bar.update(k - bar.n)
+            )
     finally:
         if bar is not None:
             bar.close()
+    results = dict(enumerate(taught))
     rows = [r for i in sorted(results) for r in results[i][0]]
     demo_rows = [r for i in sorted(results) for r in results[i][1]]
     runs = pd.DataFrame(rows)

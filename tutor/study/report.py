@@ -305,7 +305,9 @@ def save_result(result: CohortResult, analysis: dict, out, figures: bool = True)
     return paths
 
 
-def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> pd.DataFrame:
+def robustness(
+    experiment: int, seeds, n=None, workers=None, progress=True, scheduler=None
+) -> pd.DataFrame:
     """Rerun a cohort for each seed; one row per seed: the conclusions and key numbers.
 
     Raises
@@ -320,7 +322,9 @@ def robustness(experiment: int, seeds, n=None, workers=None, progress=True) -> p
         check_request(experiment, n, seed)
     rows = []
     for seed in seeds:
-        result = run_experiment(experiment, seed=seed, n=n, workers=workers, progress=progress)
+        result = run_experiment(
+            experiment, seed=seed, n=n, workers=workers, progress=progress, scheduler=scheduler
+        )
         a = analyse(result)
         row = {"seed": seed, **a["conclusions"]}
         row["all hold"] = all(a["conclusions"].values())

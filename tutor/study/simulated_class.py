@@ -25,11 +25,11 @@ import os
 from dataclasses import replace
 from pathlib import Path
 
+from ..engine import Engine
 from ..errors import InvalidParameterError, SaveError
 from ..fileio import write_json
 from ..framework.protocol import run_file_name
 from ..framework.record import Trainee
-from ..workers import one_blas_thread, process_pool
 from .cohort import StudySettings, check_conditions, check_request, teach_runs
 
 __all__ = ["write_simulated_class", "trainee_name", "DAMAGES"]
@@ -141,12 +141,8 @@ def write_simulated_class(
     folder = Path(folder)
     items = [(experiment, i, seed, n, conditions) for i in range(n)]
     workers = min(os.cpu_count() or 1, n) if workers is None else workers
-    if workers > 1:
-        with process_pool(workers) as pool:
-            taught = list(pool.map(_teacher_records, items))
-    else:
-        one_blas_thread()
-        taught = [_teacher_records(item) for item in items]
+    with Engine(workers) as engine:
+        taught = engine.map(_teacher_records, items)
     out = {"written": [], "unfinished": [], "damaged": []}
     spoil = list(DAMAGES.values())
     for i, (trainee, records) in enumerate(taught):
