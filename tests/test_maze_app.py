@@ -62,6 +62,17 @@ def test_rules_circle_and_compliance(tmp_path, good):
     assert app.compliance == [True]
 
 
+def test_a_stroke_through_an_obstacle_is_drawn_and_counted(maze_task):
+    """The demo hits obstacle 1: the picture marks where, the panel says which."""
+    app = MazeTutor("VF", task=maze_task)
+    start, goal = np.array([0.10, 0.03]), np.asarray(maze_task.layout.target_center, float)
+    app.pad.draw(np.c_[np.linspace(0.0, 2.0, 40), np.linspace(start, goal, 40)])
+    assert app.session.n_demos == 1 and not app.session.latest.demo_passed
+    assert app.session.latest.demo_causes[0].obstacle == 0  # the first obstacle, as data
+    assert "refreshing the tutor failed" not in app.message
+    assert "obstacle 1" in app.pad.summary  # the picture's own count names it
+
+
 def test_rejected_stroke_changes_nothing(tmp_path, good):
     app = MazeTutor("VF", run_file=tmp_path / "vf.json")
     app.pad.draw(good[0])

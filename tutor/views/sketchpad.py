@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import anywidget
 import numpy as np
@@ -53,7 +54,7 @@ def layout_spec(layout) -> dict:
     """The maze geometry as the browser needs it (metres)."""
 
     def box(b):
-        return {"x": [b.x0, b.x1], "y": [b.y0, b.y1], "name": b.name}
+        return {"x": [b.x0, b.x1], "y": [b.y0, b.y1], "name": b.name, "label": b.label}
 
     return {
         "workspace": box(layout.workspace),
@@ -84,6 +85,10 @@ class _MazeLayout:
     def __init__(self, spec: dict):
         self.target_center = np.asarray(spec["target"]["center"], dtype=float)
         self.target_radius = float(spec["target"]["diameter"]) / 2
+        self.obstacles = tuple(
+            SimpleNamespace(label=o.get("label") or o.get("name") or f"obstacle {i + 1}")
+            for i, o in enumerate(spec.get("obstacles", ()))
+        )
 
 
 class Sketchpad(anywidget.AnyWidget):
