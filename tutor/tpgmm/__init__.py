@@ -49,6 +49,9 @@ em
     EM on sufficient statistics with SQUAREM acceleration.
 regression
     Gaussian mixture regression over time and the product over frames.
+tracking
+    Linear quadratic tracking of the TP-GMR from the robot's own start state (a robot
+    running the model: tight where the demos agree, loose where they do not).
 linalg
     Small linear algebra shared by the above.
 
