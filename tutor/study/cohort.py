@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -349,6 +350,7 @@ def run_experiment(
     settings: StudySettings = StudySettings(),
     conditions=None,
     scheduler: str | None = None,
+    engine: Engine | None = None,
 ) -> CohortResult:
     """Simulate a whole cohort of Experiment 1 or 2.
 
@@ -372,6 +374,9 @@ def run_experiment(
     scheduler : str, optional
         Run on a Dask cluster: ``"auto"`` (a local one) or ``"tcp://HOST:PORT"``
         (:class:`tutor.engine.Engine`); the same numbers as the process pool.
+    engine : Engine, optional
+        An engine already started (several cohorts on one cluster, e.g. robustness):
+        ``workers`` and ``scheduler`` are then its own, and it stays open.
 
     Returns
     -------
@@ -392,8 +397,8 @@ def run_experiment(
         bar = tqdm(total=n, desc=f"Experiment {experiment}", unit="teacher")
     jobs = [(experiment, i, seed, n, population, settings, conditions) for i in range(n)]
     try:
-        with Engine(workers, scheduler) as engine:
-            taught = engine.map(
+        with Engine(workers, scheduler) if engine is None else nullcontext(engine) as running:
+            taught = running.map(
                 _teacher_job, jobs, step=None if bar is None else lambda k: bar.update(k - bar.n)
             )
     finally:

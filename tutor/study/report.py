@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 
 from .. import paper
+from ..engine import Engine
 from ..errors import InvalidFileError, InvalidParameterError, SaveError
 from ..fileio import check_path_length
 from ..framework import protocol
@@ -321,24 +322,30 @@ def robustness(
     for seed in seeds:
         check_request(experiment, n, seed)
     rows = []
-    for seed in seeds:
-        result = run_experiment(
-            experiment, seed=seed, n=n, workers=workers, progress=progress, scheduler=scheduler
-        )
-        a = analyse(result)
-        row = {"seed": seed, **a["conclusions"]}
-        row["all hold"] = all(a["conclusions"].values())
-        row.update({f"relative {k}": v for k, v in a["relative"].items()})
-        how = stats.ANALYSES[experiment]
-        row.update({f"eta {c}": v for c, v in a["stats"][how.key].items()})
-        if how.failures:
-            fail = a["failures"]
-            for kind in fail.index:
-                row.update({f"{kind} {c}": int(fail.loc[kind, c]) for c in fail.columns})
-            matched = a["replication"]["paper's means"]
-            row.update({f"paper-matched rate: {k}": v for k, v in matched.items()})
-        rows.append(row)
+    with Engine(workers, scheduler) as engine:  # one pool or cluster for every seed
+        for seed in seeds:
+            rows.append(_robustness_row(
+                run_experiment(experiment, seed=seed, n=n, progress=progress, engine=engine)
+            ))
     return pd.DataFrame(rows)
+
+
+def _robustness_row(result: CohortResult) -> dict:
+    """One seed's row of :func:`robustness`: its conclusions and key numbers."""
+    experiment, seed = result.experiment, result.seed
+    a = analyse(result)
+    row = {"seed": seed, **a["conclusions"]}
+    row["all hold"] = all(a["conclusions"].values())
+    row.update({f"relative {k}": v for k, v in a["relative"].items()})
+    how = stats.ANALYSES[experiment]
+    row.update({f"eta {c}": v for c, v in a["stats"][how.key].items()})
+    if how.failures:
+        fail = a["failures"]
+        for kind in fail.index:
+            row.update({f"{kind} {c}": int(fail.loc[kind, c]) for c in fail.columns})
+        matched = a["replication"]["paper's means"]
+        row.update({f"paper-matched rate: {k}": v for k, v in matched.items()})
+    return row
 
 
 def check_seeds(seeds) -> list[int]:
