@@ -343,8 +343,8 @@ class TeachingSession:
         task, thr = self.task, self.thresholds
         points = task.test_points
         context = task.criteria_context(demos, np.array(demo_points))
-        mean, _ = learner.reproduce_batch(task.frame_batch(points), task.times)
-        verdict = task.judge(mean, points, context)
+        attempts = task.realise(learner, points)
+        verdict = task.judge(attempts, points, context)
         demo = demos[-1]
         own = task.judge_demo(demo, demo_points[-1], context)
         m = len(demos)
@@ -361,7 +361,7 @@ class TeachingSession:
         )
         undemonstrated = ~verdict.passed & ~demonstrated
         if self.policy.adaptive and not replayed:
-            selected = self._adaptive_picks(learner, demo_points, mean, verdict.passed)
+            selected = self._adaptive_picks(learner, demo_points, attempts, verdict.passed)
         shown = self._shown(demo_points[-1], selected)
         delta_a = thr.ambiguity_distance
         if delta_a is None:
@@ -402,7 +402,7 @@ class TeachingSession:
             shown=shown,
             warnings=tuple(warnings),
         )
-        return record, mean
+        return record, attempts
 
     def _adaptive_picks(self, learner, points, realisations, passed) -> np.ndarray:
         """The selector's k picks after this demo (``"adaptive"`` mode)."""

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..tpgmm import TPGMM, Frame, FrameBatch
+from ..tpgmm.tracking import DEFAULT_CONTROL_COST, track
 from .wording import REASON_WORDS, listing
 
 __all__ = ["Task", "Verdict", "Reason"]
@@ -160,6 +161,49 @@ class Task(ABC):
     def frame_batch(self, points) -> FrameBatch:
         """Frames of many conditions; override for speed."""
         return FrameBatch.from_frames([self.frames(c) for c in np.asarray(points)])
+
+    # ---------------------------------------------------------------- realisation
+
+    #: r of the tracking controller's control cost R = r I (:mod:`tutor.tpgmm.tracking`)
+    control_cost: float = DEFAULT_CONTROL_COST
+    #: the leading coordinates the robot moves through (tracked from its start state);
+    #: the others (a gripper) are commands it follows as the model gives them
+    moving_dims: int | None = None
+
+    @abstractmethod
+    def start_states(self, points) -> np.ndarray:
+        """Where the robot is when it starts each of ``points``, at rest: shape (B, n)
+        for the first n = :attr:`moving_dims` coordinates."""
+
+    def commands(self, modelled: np.ndarray) -> np.ndarray:
+        """The coordinates past :attr:`moving_dims` as the robot carries them out
+        (B, T, d - n); default: as the model gives them."""
+        return modelled
+
+    def realise(self, learner, points=None) -> np.ndarray:
+        r"""Lambda: the attempts the robot makes from ``points`` (default B^), (B, T, d).
+
+        The learner's TP-GMR gives :math:`\mathcal N(\mu_t, \Sigma_t)` under each test
+        point's frames; the robot, at rest at :meth:`start_states`, tracks it with the
+        linear quadratic controller of :func:`tutor.tpgmm.tracking.track` (precision as
+        the weight, control cost :attr:`control_cost`). So every attempt starts where
+        the robot is, whatever the regression's first mean; the criteria judge this
+        executed path.
+        """
+        points = self.test_points if points is None else points
+        mean, cov = learner.reproduce_batch(self.frame_batch(points), self.times)
+        n = mean.shape[-1] if self.moving_dims is None else self.moving_dims
+        precision = np.linalg.inv(cov[..., :n, :n])
+        start = np.asarray(self.start_states(points), dtype=float)
+        if start.shape != (mean.shape[0], n):
+            raise InvalidParameterError(
+                f"start_states must give shape {(mean.shape[0], n)}, got {start.shape}"
+            )
+        dt = float(self.times[1] - self.times[0])
+        moved = track(mean[..., :n], precision, start, dt, self.control_cost)
+        if n == mean.shape[-1]:
+            return moved
+        return np.concatenate([moved, self.commands(mean[..., n:])], axis=-1)
 
     @abstractmethod
     def preprocess(self, raw) -> np.ndarray:

@@ -35,9 +35,9 @@ recompute it). Regenerate it after any change to the learner, the tasks or the h
 
     python -m tutor.study.optimal --out tutor/assets/optimal.json
 
-Efficacy is computed with the lookahead's exact shortcuts (:func:`realise`,
-:func:`judged`; ``tests/test_optimal.py`` checks them against the session) and the
-candidates are scored on both cores.
+Efficacy is computed with the task's realisation (:meth:`~tutor.framework.Task.realise`)
+and the lookahead's exact shortcut :func:`judged` (``tests/test_optimal.py`` checks both
+against the session); the candidates are scored on both cores.
 """
 
 from __future__ import annotations
@@ -63,7 +63,6 @@ from ..tasks.lookahead import (
     best_next,
     efficacy_after,
     judged,
-    realise,
 )
 
 __all__ = [
@@ -74,7 +73,6 @@ __all__ = [
     "PairBound",
     "make_bank",
     "careful_recording",
-    "realise",
     "efficacy_after",
     "judged",
     "best_next",

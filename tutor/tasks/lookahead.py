@@ -8,9 +8,9 @@ copy, warm-started when the task's learner warm-starts, the same criteria). Ties
 the first candidate, so the answer is deterministic. It is the step of the optimal
 teacher (:mod:`tutor.study.optimal`) and of a next-demo hint.
 
-A candidate costs one refit (about 10-20 ms) and little else: R^ is the learner's
-batch reproduction (:func:`realise`; with axis-aligned frames, an affine map of the
-frames' origins, :func:`tutor.tpgmm.regression.product_of_frames`), and
+A candidate costs one refit (about 10-20 ms) and little else: R^ is the robot's
+attempts (:meth:`tutor.framework.Task.realise`: the batch reproduction, with
+axis-aligned frames an affine map of the frames' origins, tracked from each start), and
 :func:`judged` follows the pick-and-place arm (criterion (i)) only for realisations that
 meet criteria (ii) and (iii): a realisation is in B iff it meets them all.
 
@@ -36,7 +36,6 @@ __all__ = [
     "Scorer",
     "make_bank",
     "scripted_recording",
-    "realise",
     "judged",
     "efficacy_after",
     "best_next",
@@ -147,13 +146,6 @@ def _whole(value, name: str, lowest: int) -> int:
 # ---------------------------------------------------------------- efficacy, fast
 
 
-def realise(task, learner) -> np.ndarray:
-    """R^: the learner's mean realisation from every test point of B^, (n, T, d)
-    (``learner.reproduce_batch`` under ``task.frame_batch(task.test_points)``, as the
-    session computes it)."""
-    return learner.reproduce_batch(task.frame_batch(task.test_points), task.times)[0]
-
-
 @dataclass
 class State:
     """What the session knows before the next demo: its demos, test points and learner.
@@ -199,7 +191,7 @@ def efficacy_after(task, state: State, demo, point):
     learner = copy.deepcopy(state.learner)
     learner.fit(demos, [task.frames(c) for c in points])
     context = task.criteria_context(demos, points)
-    passed = judged(task, realise(task, learner), context)
+    passed = judged(task, task.realise(learner), context)
     return float(passed.mean()), passed, learner
 
 

@@ -91,6 +91,7 @@ class MazeLayout:
     grid_margin: float = 0.005
     n_components: int = 11
     n_samples: int = 200
+    control_cost: float = 1e-2
 
     @property
     def target_radius(self) -> float:
@@ -179,6 +180,7 @@ def load_layout(path=None) -> MazeLayout:
         grid_margin=float(grid.get("margin", 0.005)),
         n_components=int(data.get("n_components", 11)),
         n_samples=int(data.get("n_samples", 200)),
+        control_cost=float(data.get("control_cost", 1e-2)),
     )
 
 
@@ -234,6 +236,15 @@ class MazeTask(Task):
 
     def make_learner(self) -> TPGMM:
         return TPGMM(self.layout.n_components, warm_start=True)
+
+    @property
+    def control_cost(self) -> float:
+        """The pen's tracking control cost (``control_cost`` in the layout file)."""
+        return self.layout.control_cost
+
+    def start_states(self, points) -> np.ndarray:
+        """The pen starts at rest on the start point itself."""
+        return np.asarray(points, dtype=float).reshape(-1, 2)
 
     def format_distance(self, distance: float) -> str:
         return f"{100 * distance:.1f} cm"

@@ -66,6 +66,7 @@ class PickPlaceScene:
     reg_covar: float = 1e-4
     warm_start: bool = False
     n_samples: int = 200
+    control_cost: float = 1e-4
     realisation_seconds: float = 25.0
     run_seconds: float = 900.0
 
@@ -124,6 +125,7 @@ def load_scene(path=None) -> PickPlaceScene:
         reg_covar=float(data.get("reg_covar", 1e-4)),
         warm_start=bool(data.get("warm_start", False)),
         n_samples=int(data.get("n_samples", 200)),
+        control_cost=float(data.get("control_cost", 1e-4)),
         realisation_seconds=float(data.get("realisation_seconds", 25.0)),
         run_seconds=float(data.get("run_seconds", 900.0)),
     )
@@ -246,6 +248,22 @@ class PickPlaceTask(Task):
         b[:, 2, :3] = self.scene.release_point
         eye = np.broadcast_to(np.eye(4), (B, 3, 4, 4)).copy()
         return FrameBatch(eye, eye.copy(), b)
+
+    #: the tool point (x, y, z) moves; the hand (g) is a command
+    moving_dims = 3
+
+    @property
+    def control_cost(self) -> float:
+        """The tool point's tracking control cost (``control_cost`` in the scene file)."""
+        return self.scene.control_cost
+
+    def start_states(self, points) -> np.ndarray:
+        """Every attempt starts with the tool point at the arm's start pose, at rest."""
+        return np.broadcast_to(self.start, (len(np.asarray(points).reshape(-1, 3)), 3)).copy()
+
+    def commands(self, modelled) -> np.ndarray:
+        """The hand opens and closes as the model says, within its range (0 open, 1 closed)."""
+        return np.clip(modelled, 0.0, 1.0)
 
     def make_learner(self) -> TPGMM:
         sc = self.scene
