@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from ..tpgmm import TPGMM, Frame, FrameBatch
-from ..tpgmm.tracking import DEFAULT_CONTROL_COST, track
+from ..tpgmm.tracking import DEFAULT_CONTROL_COST, track, tracking_precision
 from .wording import REASON_WORDS, listing
 
 __all__ = ["Task", "Verdict", "Reason"]
@@ -193,7 +193,7 @@ class Task(ABC):
         points = self.test_points if points is None else points
         mean, cov = learner.reproduce_batch(self.frame_batch(points), self.times)
         n = mean.shape[-1] if self.moving_dims is None else self.moving_dims
-        precision = np.linalg.inv(cov[..., :n, :n])
+        precision = tracking_precision(cov[..., :n, :n])
         start = np.asarray(self.start_states(points), dtype=float)
         if start.shape != (mean.shape[0], n):
             raise InvalidParameterError(

@@ -47,7 +47,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 
-__all__ = ["DEFAULT_CONTROL_COST", "track", "tracking_gains"]
+__all__ = ["DEFAULT_CONTROL_COST", "track", "tracking_gains", "tracking_precision"]
 
 #: r of R = r I, relative to the precisions (the model's units): small enough that the
 #: robot follows the demos where they agree, large enough that it does not jump
@@ -68,9 +68,9 @@ def _check(mean, precision, start, dt, control_cost):
     if mean.ndim != 3:
         raise InvalidParameterError(f"mean must have shape (B, T, d), got {mean.shape}")
     n, T, d = mean.shape
-    if precision.shape != (n, T, d, d):
+    if precision.shape not in ((n, T, d, d), (1, T, d, d)):
         raise InvalidParameterError(
-            f"precision must have shape {(n, T, d, d)}, got {precision.shape}"
+            f"precision must have shape {(n, T, d, d)} or {(1, T, d, d)}, got {precision.shape}"
         )
     if start.shape not in ((n, d), (n, 2 * d)):
         raise InvalidParameterError(
@@ -86,6 +86,95 @@ def _check(mean, precision, start, dt, control_cost):
     if T < 2:
         raise InvalidParameterError(f"a path to track needs at least 2 time steps, got {T}")
     return mean, precision, start, float(dt), float(control_cost)
+
+
+def tracking_precision(cov) -> np.ndarray:
+    """The tracking weights for covariances (B, T, d, d): their inverses, (m, T, d, d).
+
+    m = 1 when every test point has the same covariances. Under frames that only
+    translate (the maze's and the arm's) the product of the frames' Gaussians has the
+    same covariance for every test point (only the means move), so it is inverted once
+    and the Riccati recursion, which sees only the precisions, runs once.
+    """
+    cov = np.asarray(cov, dtype=float)
+    if cov.ndim != 4 or cov.shape[-1] != cov.shape[-2]:
+        raise InvalidParameterError(f"cov must have shape (B, T, d, d), got {cov.shape}")
+    if len(cov) > 1 and np.allclose(cov, cov[:1], rtol=1e-10, atol=0.0):
+        cov = cov[:1]
+    return np.linalg.inv(cov)
+
+
+def _shared(precision: np.ndarray) -> np.ndarray:
+    """``precision`` as (m, T, d, d), m = 1 when all test points share it."""
+    if len(precision) > 1 and np.allclose(precision, precision[:1], rtol=1e-10, atol=0.0):
+        return precision[:1]
+    return precision
+
+
+def _riccati(precision: np.ndarray, dt: float, r: float):
+    """The backward pass that needs only the precisions (m, T, d, d).
+
+    Returns the feedback gains K (m, T - 1, d, 2d), the maps L = S^-1 B^T (m, T - 1, d, 2d)
+    that turn the next step's linear cost term into the feedforward, and the closed-loop
+    matrices A - B K (m, T - 1, 2d, 2d).
+    """
+    m, T, d, _ = precision.shape
+    A, B = _plant(d, dt)
+    R = r * np.eye(d)
+    if m == 1:  # one controller for every test point: plain 2-D products are faster
+        return tuple(a[None] for a in _riccati_one(precision[0], A, B, R))
+    V = np.zeros((m, 2 * d, 2 * d))
+    V[:, :d, :d] = precision[:, -1]
+    K = np.empty((m, T - 1, d, 2 * d))
+    L = np.empty((m, T - 1, d, 2 * d))
+    closed = np.empty((m, T - 1, 2 * d, 2 * d))
+    for t in range(T - 2, -1, -1):
+        VB = V @ B  # (m, 2d, d)
+        S = R + B.T @ VB  # (m, d, d)
+        L[:, t] = np.linalg.solve(S, np.broadcast_to(B.T, (m, d, 2 * d)))
+        K[:, t] = L[:, t] @ V @ A
+        closed[:, t] = A - B @ K[:, t]
+        V = A.T @ V @ closed[:, t]
+        V[:, :d, :d] += precision[:, t]
+        V = 0.5 * (V + np.swapaxes(V, 1, 2))
+    return K, L, closed
+
+
+def _riccati_one(precision, A, B, R):
+    """:func:`_riccati` for one sequence of precisions (T, d, d)."""
+    T, d, _ = precision.shape
+    BT = B.T
+    V = np.zeros((2 * d, 2 * d))
+    V[:d, :d] = precision[-1]
+    K = np.empty((T - 1, d, 2 * d))
+    L = np.empty((T - 1, d, 2 * d))
+    closed = np.empty((T - 1, 2 * d, 2 * d))
+    for t in range(T - 2, -1, -1):
+        L[t] = np.linalg.solve(R + BT @ V @ B, BT)
+        K[t] = L[t] @ V @ A
+        closed[t] = A - B @ K[t]
+        V = A.T @ V @ closed[t]
+        V[:d, :d] += precision[t]
+        V = 0.5 * (V + V.T)
+    return K, L, closed
+
+
+def _feedforward(mean, precision, L, closed):
+    """The backward pass of the linear cost term, per test point: k (B, T - 1, d)."""
+    n, T, d = mean.shape
+    weighted = (precision @ mean[..., None])[..., 0]  # Q_t mu_t, (B, T, d); m is 1 or B
+    s = np.zeros((n, 2 * d))
+    s[:, :d] = weighted[:, -1]
+    k = np.empty((n, T - 1, d))
+    for t in range(T - 2, -1, -1):
+        if len(L) > 1:  # one controller per test point
+            k[:, t] = np.einsum("bij,bj->bi", L[:, t], s)
+            s = np.einsum("bji,bj->bi", closed[:, t], s)
+        else:
+            k[:, t] = s @ L[0, t].T
+            s = s @ closed[0, t]
+        s[:, :d] += weighted[:, t]
+    return k
 
 
 def tracking_gains(mean, precision, dt: float, control_cost: float = DEFAULT_CONTROL_COST):
@@ -112,29 +201,10 @@ def tracking_gains(mean, precision, dt: float, control_cost: float = DEFAULT_CON
     mean, precision, _, dt, r = _check(
         mean, precision, np.zeros(np.shape(mean)[::2]), dt, control_cost
     )
-    n, T, d = mean.shape
-    A, B = _plant(d, dt)
-    R = r * np.eye(d)
-    # cost-to-go at step t: 1/2 x^T V x - s^T x (+ const); only positions are weighted
-    V = np.zeros((n, 2 * d, 2 * d))
-    s = np.zeros((n, 2 * d))
-    V[:, :d, :d] = precision[:, -1]
-    s[:, :d] = np.einsum("bij,bj->bi", precision[:, -1], mean[:, -1])
-    K = np.empty((n, T - 1, d, 2 * d))
-    k = np.empty((n, T - 1, d))
-    for t in range(T - 2, -1, -1):
-        VB = V @ B  # (n, 2d, d)
-        S = R + B.T @ VB  # (n, d, d)
-        gain = np.linalg.solve(S, np.swapaxes(VB, 1, 2) @ A)  # (n, d, 2d)
-        feed = np.linalg.solve(S, (B.T @ s[..., None]))[..., 0]  # (n, d)
-        K[:, t], k[:, t] = gain, feed
-        closed = A - B @ gain  # (n, 2d, 2d)
-        V = A.T @ V @ closed
-        V[:, :d, :d] += precision[:, t]
-        V = 0.5 * (V + np.swapaxes(V, 1, 2))
-        s = np.einsum("bji,bj->bi", closed, s)
-        s[:, :d] += np.einsum("bij,bj->bi", precision[:, t], mean[:, t])
-    return K, k
+    shared = _shared(precision)
+    K, L, closed = _riccati(shared, dt, r)
+    k = _feedforward(mean, shared, L, closed)
+    return np.broadcast_to(K, (len(mean), *K.shape[1:])), k
 
 
 def track(
@@ -150,7 +220,8 @@ def track(
     Parameters
     ----------
     mean : ndarray (B, T, d)
-    precision : ndarray (B, T, d, d)
+    precision : ndarray (B, T, d, d), or (1, T, d, d) shared by every test point
+        (:func:`tracking_precision` gives it from the TP-GMR's covariances)
     start : ndarray (B, d) or (B, 2d)
         Each test point's start position (at rest), or position and velocity.
     dt : float
@@ -167,15 +238,20 @@ def track(
     """
     mean, precision, start, dt, r = _check(mean, precision, start, dt, control_cost)
     n, T, d = mean.shape
-    K, k = tracking_gains(mean, precision, dt, r)
-    A, B = _plant(d, dt)
+    shared = _shared(precision)
+    _, L, closed = _riccati(shared, dt, r)
+    k = _feedforward(mean, shared, L, closed)
+    _, B = _plant(d, dt)
+    drive = k @ B.T  # B k_t, (n, T - 1, 2d)
     x = np.zeros((n, 2 * d))
     x[:, : start.shape[1]] = start
     states = np.empty((n, T, 2 * d))
     states[:, 0] = x
     for t in range(T - 1):
-        u = k[:, t] - np.einsum("bij,bj->bi", K[:, t], x)
-        x = x @ A.T + u @ B.T
+        if len(closed) > 1:  # one controller per test point
+            x = np.einsum("bij,bj->bi", closed[:, t], x) + drive[:, t]
+        else:
+            x = x @ closed[0, t].T + drive[:, t]
         states[:, t + 1] = x
     if return_velocity:
         return states[..., :d], states[..., d:]

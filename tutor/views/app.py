@@ -20,6 +20,7 @@ import ipywidgets as w
 
 from ..framework import RunRecord, TeachingRun
 from ..framework.controller import RESET_CONFIRM_SECONDS, UNDO_NOTE, RunController
+from ..workers import one_blas_thread
 from .uploads import Upload, on_upload
 
 __all__ = ["TutorApp", "RESET_CONFIRM_SECONDS", "guarded"]
@@ -89,6 +90,7 @@ class TutorApp:
         run: int = 1,
         practice: bool = False,
     ):
+        one_blas_thread()  # the learner's small products run faster on one BLAS thread
         self.controller = RunController(
             run_class,
             condition,
