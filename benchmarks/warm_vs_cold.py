@@ -72,8 +72,10 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=6)
     args = parser.parse_args()
     print(f"warm refit against cold fit, {args.seeds} seeds x 10 demos")
-    print("task        verdicts differ: mean   worst   |eps gap| max  objective gap max  "
-          "warm ms  cold ms")
+    print(
+        "task        verdicts differ: mean   worst   |eps gap| max  objective gap max  "
+        "warm ms  cold ms"
+    )
     for name in ("maze", "pickplace"):
         r = compare(name, args.seeds)
         print(

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tutor.errors import InvalidParameterError
-from tutor.tpgmm.tracking import track, tracking_gains
+from tutor.tpgmm.tracking import _plant, track, tracking_gains, tracking_precision
 
 
 def _reference(rng, n=3, T=40, d=2, tight=1e4):
@@ -31,6 +31,56 @@ def test_the_path_starts_exactly_where_the_robot_is(seed, d):
     assert np.isfinite(path).all()
 
 
+def _rollout(mean, precision, start, dt, r):
+    """The feedback controller run forward: x_{t+1} = A x_t + B (k_t - K_t x_t)."""
+    n, T, d = mean.shape
+    K, k = tracking_gains(mean, precision, dt, r)
+    A, B = _plant(d, dt)
+    x = np.zeros((n, 2 * d))
+    x[:, : start.shape[1]] = start
+    out = [x[:, :d].copy()]
+    for t in range(T - 1):
+        u = k[:, t] - np.einsum("bij,bj->bi", K[:, t], x)
+        x = x @ A.T + u @ B.T
+        out.append(x[:, :d].copy())
+    return np.stack(out, axis=1)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    d=st.integers(1, 3),
+    T=st.integers(2, 40),
+    log_r=st.floats(-6, 0),
+    shared=st.booleans(),
+    moving=st.booleans(),
+)
+def test_the_batch_solution_is_the_feedback_controllers_path(seed, d, T, log_r, shared, moving):
+    """The banded least squares (track) and the Riccati feedback (tracking_gains) are the
+    same optimum: their paths agree, for shared or per-point precisions, at rest or not."""
+    rng = np.random.default_rng(seed)
+    n = 3
+    mean = rng.normal(size=(n, T, d))
+    root = rng.normal(size=(1 if shared else n, T, d, d))
+    precision = root @ np.swapaxes(root, -1, -2) + 0.5 * np.eye(d)
+    start = rng.normal(size=(n, 2 * d if moving else d))
+    dt = 1.0 / max(T - 1, 1)
+    batch = track(mean, precision, start, dt, 10.0**log_r)
+    feedback = _rollout(mean, precision, start, dt, 10.0**log_r)
+    np.testing.assert_allclose(batch, feedback, atol=1e-8 * max(1.0, np.abs(feedback).max()))
+
+
+def test_shared_covariances_are_inverted_once():
+    rng = np.random.default_rng(4)
+    root = rng.normal(size=(1, 5, 2, 2))
+    cov = root @ np.swapaxes(root, -1, -2) + np.eye(2)
+    assert tracking_precision(np.repeat(cov, 4, axis=0)).shape == (1, 5, 2, 2)
+    different = np.concatenate([cov, 2 * cov])
+    np.testing.assert_allclose(tracking_precision(different), np.linalg.inv(different))
+    with pytest.raises(InvalidParameterError, match="cov must have shape"):
+        tracking_precision(cov[0])
+
+
 def test_batched_is_one_at_a_time():
     rng = np.random.default_rng(0)
     mean, precision, dt = _reference(rng, n=4)
@@ -46,8 +96,9 @@ def test_a_reference_from_the_start_is_followed_closely():
     rng = np.random.default_rng(1)
     mean, precision, dt = _reference(rng, tight=1e6)
     path, velocity = track(mean, precision, mean[:, 0], dt, return_velocity=True)
-    assert np.abs(path - mean).max() < 0.02 * np.abs(mean).max()
-    np.testing.assert_array_equal(velocity[:, 0], 0.0)  # it starts at rest
+    np.testing.assert_array_equal(velocity[:, 0], 0.0)  # it starts at rest,
+    np.testing.assert_array_equal(path[:, 1], path[:, 0])  # so its first step cannot move
+    assert np.abs(path[:, 2:] - mean[:, 2:]).max() < 0.02 * np.abs(mean).max()
 
 
 def test_minimal_intervention_loose_where_the_demos_disagree():
@@ -88,8 +139,9 @@ def test_bad_inputs_are_named_errors(change, match):
 
 
 def test_maze_attempts_after_one_and_two_demos_start_at_their_start_points(maze_task):
-    """The regression's first mean is up to 12.6 cm from the start point after one demo;
-    the tracked path starts on it (issue 22's first line, for the controller alone)."""
+    """The regression's first mean is cm from the start point after one or two demos; the
+    robot's attempts (the session's realisations) start on it, and no attempt fails
+    for starting outside the start zone (issue 22's first line)."""
     from tutor.demofiles import load_demos
     from tutor.framework.session import TeachingSession
     from tutor.resources import asset
@@ -99,10 +151,26 @@ def test_maze_attempts_after_one_and_two_demos_start_at_their_start_points(maze_
     points = maze_task.test_points
     for demo in good[:2]:
         session.add_demo(demo)
-        mean, cov = session.learner.reproduce_batch(
-            maze_task.frame_batch(points), maze_task.times
-        )
+        mean, _ = session.learner.reproduce_batch(maze_task.frame_batch(points), maze_task.times)
         assert np.linalg.norm(mean[:, 0] - points, axis=1).max() > 0.01  # the regression's
-        dt = maze_task.times[1] - maze_task.times[0]
-        path = track(mean, np.linalg.inv(cov), points, dt)
-        assert np.linalg.norm(path[:, 0] - points, axis=1).max() <= 0.001
+        attempts = session.realisations
+        assert np.linalg.norm(attempts[:, 0] - points, axis=1).max() <= 0.001
+        causes = maze_task.judge(attempts, points).causes
+        assert not any(reason.kind == "start" for c in causes for reason in c)
+
+
+def test_pickplace_attempts_after_one_and_two_demos_start_at_the_start_pose(pickplace_task):
+    from tutor.demofiles import load_demos
+    from tutor.framework.session import TeachingSession
+    from tutor.resources import asset
+
+    task = pickplace_task
+    demos = load_demos(asset("demos/pickplace_corners.json"), columns=("t", "x", "y", "z", "g"))
+    session = TeachingSession(task)
+    for demo in demos.demos[:2]:
+        session.add_demo(demo)
+        mean, _ = session.learner.reproduce_batch(task.frame_batch(task.test_points), task.times)
+        assert np.linalg.norm(mean[:, 0, :3] - task.start, axis=1).max() > 0.01
+        attempts = session.realisations
+        assert np.linalg.norm(attempts[:, 0, :3] - task.start, axis=1).max() <= 0.001
+        assert np.all((attempts[..., 3] >= 0) & (attempts[..., 3] <= 1))  # the hand's range

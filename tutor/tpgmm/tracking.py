@@ -3,20 +3,22 @@ r"""A robot that follows the TP-GMR from where it is: linear quadratic tracking.
 The TP-GMR (:meth:`tutor.tpgmm.TPGMM.reproduce_batch`) gives at every time step a
 Gaussian :math:`\mathcal N(\mu_t, \Sigma_t)` over the position. Its mean is a
 regression, not a movement: it need not start where the robot is. The standard way to
-run a TP-GMM on a robot (Calinon 2016, section 4; PbDlib's ``demo_TPGMR_LQR``) is a
-controller that tracks that Gaussian from the robot's actual state, with the
-precision :math:`\Sigma_t^{-1}` as the tracking weight: tight where the demonstrations
-agree, loose where they do not ("minimal intervention").
+run a TP-GMM on a robot (Calinon 2016, "A tutorial on task-parameterized movement
+learning and retrieval", section 4; PbDlib's ``demo_TPGMR_LQR``) is a controller that
+tracks that Gaussian from the robot's actual state, with the precision
+:math:`\Sigma_t^{-1}` as the tracking weight: tight where the demonstrations agree,
+loose where they do not ("minimal intervention").
 
 The plant is a double integrator per coordinate (the maze's pen; the arm's tool
-point), sampled at the TP-GMR's time steps :math:`\Delta t`:
+point), sampled at the TP-GMR's time steps :math:`\Delta t` (Euler, as in the
+tutorial):
 
 .. math::
 
     x_{t+1} = A x_t + B u_t, \quad
     x = \begin{pmatrix} p \\ v \end{pmatrix}, \quad
     A = \begin{pmatrix} I & \Delta t\, I \\ 0 & I \end{pmatrix}, \quad
-    B = \begin{pmatrix} \tfrac12 \Delta t^2 I \\ \Delta t\, I \end{pmatrix},
+    B = \begin{pmatrix} 0 \\ \Delta t\, I \end{pmatrix},
 
 and the controller minimises, from the start state :math:`x_0` (the test point at
 rest),
@@ -26,9 +28,28 @@ rest),
     \sum_{t=0}^{T-1} (p_t - \mu_t)^\top Q_t (p_t - \mu_t) + \sum_{t=0}^{T-2} u_t^\top R\, u_t,
     \quad Q_t = \Sigma_t^{-1}, \quad R = r I.
 
-The finite-horizon Riccati recursion gives the feedback :math:`u_t = -K_t x_t + k_t`
-(:func:`tracking_gains`), batched over test points; :func:`track` runs it forward.
-The path starts exactly at :math:`x_0`, whatever the regression's first mean.
+Two equivalent solutions:
+
+- **feedback** (:func:`tracking_gains`): the finite-horizon Riccati recursion gives
+  :math:`u_t = -K_t x_t + k_t`, what a robot runs to reject disturbances;
+- **batch** (:func:`track`): without disturbances the closed loop follows the open-loop
+  optimum, the tutorial's batch solution. With this plant
+  :math:`u_t = (p_{t+2} - 2 p_{t+1} + p_t) / \Delta t^2`, so with :math:`p_0` and
+  :math:`p_1 = p_0 + \Delta t\, v_0` fixed the problem is least squares in the
+  positions,
+
+  .. math::
+
+      \min_{p_2 \dots p_{T-1}} \sum_{t=2}^{T-1} (p_t - \mu_t)^\top Q_t (p_t - \mu_t)
+      + \frac{r}{\Delta t^4} \sum_{t=0}^{T-3} \lVert p_{t+2} - 2 p_{t+1} + p_t \rVert^2
+
+  (:math:`u_{T-2}` moves nothing within the horizon, so it is 0), whose normal
+  equations are block pentadiagonal: one banded Cholesky solve
+  (:func:`scipy.linalg.solveh_banded`) for all test points that share their
+  precisions, as they do under frames that only translate.
+
+``tests/test_tracking.py`` checks that both give the same path. The path starts
+exactly at :math:`x_0`, whatever the regression's first mean.
 
 Examples
 --------
@@ -43,21 +64,24 @@ Examples
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
+from scipy.linalg import solveh_banded
 
 from ..errors import InvalidParameterError
 
 __all__ = ["DEFAULT_CONTROL_COST", "track", "tracking_gains", "tracking_precision"]
 
-#: r of R = r I, relative to the precisions (the model's units): small enough that the
-#: robot follows the demos where they agree, large enough that it does not jump
+#: r of R = r I when a task does not give its own (the tasks' choices, and how they were
+#: measured, are in their asset files)
 DEFAULT_CONTROL_COST = 1e-8
 
 
 def _plant(d: int, dt: float):
     eye, zero = np.eye(d), np.zeros((d, d))
     A = np.block([[eye, dt * eye], [zero, eye]])
-    B = np.vstack([0.5 * dt * dt * eye, dt * eye])
+    B = np.vstack([zero, dt * eye])
     return A, B
 
 
@@ -85,7 +109,14 @@ def _check(mean, precision, start, dt, control_cost):
         raise InvalidParameterError(f"control_cost must be positive, got {control_cost!r}")
     if T < 2:
         raise InvalidParameterError(f"a path to track needs at least 2 time steps, got {T}")
-    return mean, precision, start, float(dt), float(control_cost)
+    return mean, _shared(precision), start, float(dt), float(control_cost)
+
+
+def _shared(precision: np.ndarray) -> np.ndarray:
+    """``precision`` as (m, T, d, d), m = 1 when every test point has the same."""
+    if len(precision) > 1 and np.allclose(precision, precision[:1], rtol=1e-10, atol=0.0):
+        return precision[:1]
+    return precision
 
 
 def tracking_precision(cov) -> np.ndarray:
@@ -93,88 +124,15 @@ def tracking_precision(cov) -> np.ndarray:
 
     m = 1 when every test point has the same covariances. Under frames that only
     translate (the maze's and the arm's) the product of the frames' Gaussians has the
-    same covariance for every test point (only the means move), so it is inverted once
-    and the Riccati recursion, which sees only the precisions, runs once.
+    same covariance for every test point (only the means move), so it is inverted once.
     """
     cov = np.asarray(cov, dtype=float)
     if cov.ndim != 4 or cov.shape[-1] != cov.shape[-2]:
         raise InvalidParameterError(f"cov must have shape (B, T, d, d), got {cov.shape}")
-    if len(cov) > 1 and np.allclose(cov, cov[:1], rtol=1e-10, atol=0.0):
-        cov = cov[:1]
-    return np.linalg.inv(cov)
+    return np.linalg.inv(_shared(cov))
 
 
-def _shared(precision: np.ndarray) -> np.ndarray:
-    """``precision`` as (m, T, d, d), m = 1 when all test points share it."""
-    if len(precision) > 1 and np.allclose(precision, precision[:1], rtol=1e-10, atol=0.0):
-        return precision[:1]
-    return precision
-
-
-def _riccati(precision: np.ndarray, dt: float, r: float):
-    """The backward pass that needs only the precisions (m, T, d, d).
-
-    Returns the feedback gains K (m, T - 1, d, 2d), the maps L = S^-1 B^T (m, T - 1, d, 2d)
-    that turn the next step's linear cost term into the feedforward, and the closed-loop
-    matrices A - B K (m, T - 1, 2d, 2d).
-    """
-    m, T, d, _ = precision.shape
-    A, B = _plant(d, dt)
-    R = r * np.eye(d)
-    if m == 1:  # one controller for every test point: plain 2-D products are faster
-        return tuple(a[None] for a in _riccati_one(precision[0], A, B, R))
-    V = np.zeros((m, 2 * d, 2 * d))
-    V[:, :d, :d] = precision[:, -1]
-    K = np.empty((m, T - 1, d, 2 * d))
-    L = np.empty((m, T - 1, d, 2 * d))
-    closed = np.empty((m, T - 1, 2 * d, 2 * d))
-    for t in range(T - 2, -1, -1):
-        VB = V @ B  # (m, 2d, d)
-        S = R + B.T @ VB  # (m, d, d)
-        L[:, t] = np.linalg.solve(S, np.broadcast_to(B.T, (m, d, 2 * d)))
-        K[:, t] = L[:, t] @ V @ A
-        closed[:, t] = A - B @ K[:, t]
-        V = A.T @ V @ closed[:, t]
-        V[:, :d, :d] += precision[:, t]
-        V = 0.5 * (V + np.swapaxes(V, 1, 2))
-    return K, L, closed
-
-
-def _riccati_one(precision, A, B, R):
-    """:func:`_riccati` for one sequence of precisions (T, d, d)."""
-    T, d, _ = precision.shape
-    BT = B.T
-    V = np.zeros((2 * d, 2 * d))
-    V[:d, :d] = precision[-1]
-    K = np.empty((T - 1, d, 2 * d))
-    L = np.empty((T - 1, d, 2 * d))
-    closed = np.empty((T - 1, 2 * d, 2 * d))
-    for t in range(T - 2, -1, -1):
-        L[t] = np.linalg.solve(R + BT @ V @ B, BT)
-        K[t] = L[t] @ V @ A
-        closed[t] = A - B @ K[t]
-        V = A.T @ V @ closed[t]
-        V[:d, :d] += precision[t]
-        V = 0.5 * (V + V.T)
-    return K, L, closed
-
-
-def _feedforward(mean, precision, L, closed):
-    """The backward pass of the linear cost term, per test point: k (B, T - 1, d)."""
-    n, T, d = mean.shape
-    weighted = (precision @ mean[..., None])[..., 0]  # Q_t mu_t, (B, T, d); m is 1 or B
-    s = np.zeros((n, 2 * d))
-    s[:, :d] = weighted[:, -1]
-    k = np.empty((n, T - 1, d))
-    for t in range(T - 2, -1, -1):
-        if len(L) > 1:  # one controller per test point
-            k[:, t] = np.einsum("bij,bj->bi", L[:, t], s)
-            s = np.einsum("bji,bj->bi", closed[:, t], s)
-        else:
-            k[:, t] = s @ L[0, t].T
-            s = s @ closed[0, t]
-        s[:, :d] += weighted[:, t]
-    return k
+# ---------------------------------------------------------------- feedback (Riccati)
 
 
 def tracking_gains(mean, precision, dt: float, control_cost: float = DEFAULT_CONTROL_COST):
@@ -184,7 +142,7 @@ def tracking_gains(mean, precision, dt: float, control_cost: float = DEFAULT_CON
     ----------
     mean : ndarray (B, T, d)
         The TP-GMR means :math:`\\mu_t` of B test points.
-    precision : ndarray (B, T, d, d)
+    precision : ndarray (B, T, d, d), or (1, T, d, d) shared by every test point
         Their precisions :math:`\\Sigma_t^{-1}` (the tracking weights).
     dt : float
         The time step.
@@ -201,10 +159,71 @@ def tracking_gains(mean, precision, dt: float, control_cost: float = DEFAULT_CON
     mean, precision, _, dt, r = _check(
         mean, precision, np.zeros(np.shape(mean)[::2]), dt, control_cost
     )
-    shared = _shared(precision)
-    K, L, closed = _riccati(shared, dt, r)
-    k = _feedforward(mean, shared, L, closed)
-    return np.broadcast_to(K, (len(mean), *K.shape[1:])), k
+    n, T, d = mean.shape
+    m = len(precision)
+    A, B = _plant(d, dt)
+    R = r * np.eye(d)
+    # cost-to-go at step t: 1/2 x^T V x - s^T x (+ const); only positions are weighted
+    V = np.zeros((m, 2 * d, 2 * d))
+    V[:, :d, :d] = precision[:, -1]
+    weighted = (
+        np.einsum("mtij,btj->bti", precision, mean)
+        if m == 1
+        else np.einsum("btij,btj->bti", precision, mean)
+    )  # Q_t mu_t, (B, T, d)
+    s = np.zeros((n, 2 * d))
+    s[:, :d] = weighted[:, -1]
+    K = np.empty((m, T - 1, d, 2 * d))
+    k = np.empty((n, T - 1, d))
+    for t in range(T - 2, -1, -1):
+        S = R + B.T @ V @ B  # (m, d, d)
+        L = np.linalg.solve(S, np.broadcast_to(B.T, (m, d, 2 * d)))  # S^-1 B^T
+        K[:, t] = L @ V @ A
+        k[:, t] = (L @ s[..., None])[..., 0]
+        closed = A - B @ K[:, t]  # (m, 2d, 2d)
+        V = A.T @ V @ closed
+        V[:, :d, :d] += precision[:, t]
+        V = 0.5 * (V + np.swapaxes(V, 1, 2))
+        s = (np.swapaxes(closed, 1, 2) @ s[..., None])[..., 0]
+        s[:, :d] += weighted[:, t]
+    return np.broadcast_to(K, (n, *K.shape[1:])), k
+
+
+# ---------------------------------------------------------------- batch (banded)
+
+
+@lru_cache(maxsize=8)
+def _second_differences(T: int) -> np.ndarray:
+    """D^T D for the second differences of T samples, (T, T); read only."""
+    D = np.zeros((T - 2, T))
+    rows = np.arange(T - 2)
+    D[rows, rows], D[rows, rows + 1], D[rows, rows + 2] = 1.0, -2.0, 1.0
+    DtD = D.T @ D
+    DtD.setflags(write=False)
+    return DtD
+
+
+def _banded_normal_matrix(precision: np.ndarray, c: float) -> np.ndarray:
+    """The normal equations' matrix for p_2 .. p_{T-1} in upper banded form (2d + 1, N).
+
+    Unknowns are ordered time-major (index (t - 2) d + i), so a precision block sits
+    within d - 1 of the diagonal and the smoothness term couples t with t + 1 and t + 2
+    at offsets d and 2d.
+    """
+    T, d, _ = precision.shape
+    free = T - 2
+    u = 2 * d
+    ab = np.zeros((u + 1, free * d))
+    cols = np.arange(free) * d
+    for i in range(d):
+        for j in range(i, d):
+            ab[u - (j - i), cols + j] += precision[2:, i, j]
+    DtD = _second_differences(T)[2:, 2:]
+    for step in range(3):
+        band = c * np.diagonal(DtD, step)  # (free - step,)
+        for i in range(d):
+            ab[u - step * d, cols[step:] + i] += band
+    return ab
 
 
 def track(
@@ -238,21 +257,34 @@ def track(
     """
     mean, precision, start, dt, r = _check(mean, precision, start, dt, control_cost)
     n, T, d = mean.shape
-    shared = _shared(precision)
-    _, L, closed = _riccati(shared, dt, r)
-    k = _feedforward(mean, shared, L, closed)
-    _, B = _plant(d, dt)
-    drive = k @ B.T  # B k_t, (n, T - 1, 2d)
-    x = np.zeros((n, 2 * d))
-    x[:, : start.shape[1]] = start
-    states = np.empty((n, T, 2 * d))
-    states[:, 0] = x
-    for t in range(T - 1):
-        if len(closed) > 1:  # one controller per test point
-            x = np.einsum("bij,bj->bi", closed[:, t], x) + drive[:, t]
+    velocity0 = start[:, d:] if start.shape[1] == 2 * d else np.zeros((n, d))
+    path = np.empty((n, T, d))
+    path[:, 0] = start[:, :d]
+    path[:, 1] = start[:, :d] + dt * velocity0
+    if T > 2:
+        c = r / dt**4
+        # right-hand side: Q_t mu_t, less the smoothness term's pull from p_0 and p_1
+        if len(precision) == 1:  # (B, T - 2, d); einsum is far faster than a stacked @
+            rhs = np.einsum("tij,btj->bti", precision[0, 2:], mean[:, 2:])
         else:
-            x = x @ closed[0, t].T + drive[:, t]
-        states[:, t + 1] = x
-    if return_velocity:
-        return states[..., :d], states[..., d:]
-    return states[..., :d]
+            rhs = np.einsum("btij,btj->bti", precision[:, 2:], mean[:, 2:])
+        # second differences tie p_0 and p_1 only to p_2 and p_3
+        tie = _second_differences(T)[2:4, :2]
+        for row in range(min(2, T - 2)):
+            rhs[:, row] -= c * (tie[row, 0] * path[:, 0] + tie[row, 1] * path[:, 1])
+        if len(precision) == 1:  # one factorisation for every test point
+            ab = _banded_normal_matrix(precision[0], c)
+            free = solveh_banded(ab, rhs.reshape(n, -1).T, check_finite=False)
+            path[:, 2:] = free.T.reshape(n, T - 2, d)
+        else:
+            for b in range(n):
+                ab = _banded_normal_matrix(precision[b], c)
+                path[b, 2:] = solveh_banded(ab, rhs[b].ravel(), check_finite=False).reshape(
+                    T - 2, d
+                )
+    if not return_velocity:
+        return path
+    velocity = np.empty_like(path)
+    velocity[:, :-1] = np.diff(path, axis=1) / dt
+    velocity[:, -1] = velocity[:, -2]  # u_{T-2} = 0
+    return path, velocity
