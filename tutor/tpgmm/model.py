@@ -180,7 +180,7 @@ class TPGMM:
         cov : ndarray (T, d, d)
         """
         mean, cov = self.reproduce_batch([frames], times)
-        return mean[0], cov[0]
+        return mean[0], np.array(cov[0])
 
     def reproduce_batch(self, frames_batch, times):
         """Reproduce the task under B task conditions at once.
@@ -194,6 +194,8 @@ class TPGMM:
         -------
         mean : ndarray (B, T, d)
         cov : ndarray (B, T, d, d)
+            Read-only when every task condition has the same frame rotations: then it
+            is one covariance per time step shared by all B (a view; copy to write).
         """
         self._check_fitted()
         batch = FrameBatch.from_frames(frames_batch)

@@ -42,7 +42,9 @@ def product_of_frames(batch: FrameBatch, L: np.ndarray, Lm: np.ndarray):
     the batch, as in both tasks, whose frames are axis aligned), the product's
     precision is one per time step, shared by all B conditions, and the mean is an
     affine map of the frame origins: it is computed so, with one inversion per time
-    step instead of B (equal to the general computation to rounding).
+    step instead of B (equal to the general computation to rounding), and the
+    covariance returned is a read-only view of that one (B, T, d, d) whose first
+    stride is 0.
     """
     W = batch.A_inv  # (B, P, d, d)
     B, P, d, _ = W.shape
@@ -75,4 +77,4 @@ def _shared_rotation_product(W: np.ndarray, b: np.ndarray, L: np.ndarray, Lm: np
     B = b.shape[0]
     shift = gain.transpose(1, 2, 0, 3).reshape(T * d, P * d) @ b.reshape(B, P * d).T
     mean = base[None] + shift.reshape(T, d, B).transpose(2, 0, 1)
-    return mean, np.broadcast_to(cov, (B, T, d, d)).copy()
+    return mean, np.broadcast_to(cov, (B, T, d, d))  # one covariance, seen B times

@@ -113,8 +113,10 @@ def _check(mean, precision, start, dt, control_cost):
 
 
 def _shared(precision: np.ndarray) -> np.ndarray:
-    """``precision`` as (m, T, d, d), m = 1 when every test point has the same."""
-    if len(precision) > 1 and np.allclose(precision, precision[:1], rtol=1e-10, atol=0.0):
+    """``precision`` as (m, T, d, d), m = 1 when every test point has exactly the same:
+    a broadcast view (what :meth:`~tutor.tpgmm.TPGMM.reproduce_batch` returns when the
+    conditions share their frames' rotations, at no cost to test) or equal arrays."""
+    if len(precision) > 1 and (precision.strides[0] == 0 or (precision == precision[:1]).all()):
         return precision[:1]
     return precision
 
@@ -126,7 +128,7 @@ def tracking_precision(cov) -> np.ndarray:
     translate (the maze's and the arm's) the product of the frames' Gaussians has the
     same covariance for every test point (only the means move), so it is inverted once.
     """
-    cov = np.asarray(cov, dtype=float)
+    cov = np.asarray(cov, dtype=float)  # keeps a broadcast view's zero stride
     if cov.ndim != 4 or cov.shape[-1] != cov.shape[-2]:
         raise InvalidParameterError(f"cov must have shape (B, T, d, d), got {cov.shape}")
     return np.linalg.inv(_shared(cov))
