@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .linalg import LOG_2PI, sym
+from .linalg import LOG_2PI
 
 __all__ = ["EM", "Infeasible"]
 
@@ -29,7 +29,16 @@ class EM:
         )  # (N, F)
         self.PhiT = np.ascontiguousarray(self.Phi.T)  # (F, N): E-step reductions run along N
         self.psi = reg_covar * N / K
-        self.quad_factor = np.where(self.iu[0] == self.iu[1], -0.5, -1.0)
+        # the quadratic features' weights from a precision, flattened (D * D, Dq): the
+        # mean of its two triangles, -1/2 on the diagonal and -1 off it (the features
+        # hold each off-diagonal product once), so no symmetrising is needed
+        self.from_precision = np.zeros((D * D, self.n_quad))
+        # the second moments from their upper triangle, (Dq, D * D)
+        self.to_moments = np.zeros((self.n_quad, D * D))
+        for q, (i, j) in enumerate(zip(*self.iu, strict=True)):
+            self.from_precision[[i * D + j, j * D + i], q] = -0.5  # once on the diagonal
+            self.to_moments[q, i * D + j] = self.to_moments[q, j * D + i] = 1.0
+        self.ridge = self.psi * np.eye(D)
 
     def m_step(self, resp: np.ndarray):
         """Parameters from responsibilities ``resp`` (K, N)."""
@@ -42,34 +51,36 @@ class EM:
         """
         P, D, K = self.P, self.D, self.K
         Nk = S[:, -1]
-        if np.any(Nk < 0) or not np.all(np.isfinite(S)):
+        if not (Nk.min() >= 0 and np.isfinite(S).all()):
             raise Infeasible
         feats = S[:, :-1].reshape(K, P, self.n_quad + D)
-        Nk_safe = np.maximum(Nk, 1e-10 * self.N)
-        mean = feats[..., self.n_quad :] / Nk_safe[:, None, None]  # (K, P, D)
-        second = np.empty((K, P, D, D))
-        second[..., self.iu[0], self.iu[1]] = feats[..., : self.n_quad]
-        second[..., self.iu[1], self.iu[0]] = feats[..., : self.n_quad]
-        scatter = second - Nk[:, None, None, None] * mean[..., :, None] * mean[..., None, :]
-        cov = (scatter + self.psi * np.eye(D)) / Nk_safe[:, None, None, None]
-        return Nk / self.N, mean.transpose(1, 0, 2), sym(cov).transpose(1, 0, 2, 3)
+        Nk_safe = np.maximum(Nk, 1e-10 * self.N)[:, None, None]
+        mean = feats[..., self.n_quad :] / Nk_safe  # (K, P, D)
+        second = (feats[..., : self.n_quad] @ self.to_moments).reshape(K, P, D, D)
+        scatter = second - Nk[:, None, None, None] * (mean[..., :, None] * mean[..., None, :])
+        cov = (scatter + self.ridge) / Nk_safe[..., None]
+        return Nk / self.N, mean.transpose(1, 0, 2), cov.transpose(1, 0, 2, 3)
 
     def log_joint(self, params):
         """log pi_k + sum_j log N(u^(j) | mu_k^(j), Sigma_k^(j)) (K, N) and the log prior."""
         weights, mean, cov = params
+        P, K, D = mean.shape
         try:
             chol = np.linalg.cholesky(cov)
         except np.linalg.LinAlgError:
             raise Infeasible from None
-        prec = sym(np.linalg.inv(cov))  # (P, K, D, D)
+        prec = np.linalg.inv(cov)  # (P, K, D, D)
         logdet = 2.0 * np.log(np.diagonal(chol, axis1=-2, axis2=-1)).sum(-1)  # (P, K)
-        lin = np.einsum("pkij,pkj->pki", prec, mean)
-        quad = prec[..., self.iu[0], self.iu[1]] * self.quad_factor
-        const = -0.5 * (np.einsum("pki,pki->pk", lin, mean) + logdet + self.D * LOG_2PI)
-        W = np.concatenate([quad, lin], axis=2).transpose(1, 0, 2).reshape(self.K, -1)
-        const_k = const.sum(0) + np.log(np.maximum(weights, 1e-300))
-        W = np.hstack([W, const_k[:, None]])  # W @ PhiT = log pi_k + sum_j log N_j
-        log_prior = -0.5 * self.psi * np.trace(prec, axis1=-2, axis2=-1).sum()
+        lin = np.einsum("pkij,pkj->pki", prec, mean)  # (P, K, D)
+        W = np.empty((K, P * (self.n_quad + D) + 1))
+        blocks = W[:, :-1].reshape(K, P, self.n_quad + D)
+        blocks[..., : self.n_quad] = (prec.reshape(P, K, D * D) @ self.from_precision).transpose(
+            1, 0, 2
+        )
+        blocks[..., self.n_quad :] = lin.transpose(1, 0, 2)
+        const = -0.5 * ((lin * mean).sum(-1) + logdet).sum(0) - 0.5 * P * D * LOG_2PI
+        W[:, -1] = const + np.log(np.maximum(weights, 1e-300))  # W @ PhiT = log joint
+        log_prior = -0.5 * self.psi * np.einsum("pkii->", prec)
         return W @ self.PhiT, log_prior
 
     def warm_responsibilities(self, params, floor: float):

@@ -11,8 +11,9 @@ B^
     The objective approximation of the task space: the test points, here a
     20 x 7 grid of start points over the start zone I (|B^| = 140).
 R^
-    The realisations: one reproduction of the learnt model from every start
-    point in B^ (the mean trajectory of the TP-GMM).
+    The realisations: the robot's attempt from every start point in B^, its pen
+    starting there at rest and tracking the learnt TP-GMM
+    (:meth:`tutor.framework.Task.realise`).
 b
     The demonstration set, the teacher's demos in the order given (M = |b|).
 r
