@@ -7,17 +7,18 @@ test point (:meth:`tutor.framework.Task.realise`) and are judged by the task's c
 Prints the share of test points whose verdicts differ (mean and worst over steps), the
 largest efficacy difference, and the median fit times.
 
-Measured 2026-12-06 (6 seeds x 10 demos):
+Measured 2026-12-06 (6 seeds x 10 demos, EM tol 3e-4):
 
-- maze: verdicts differ on 0.7 % of start points on average, at worst 4.3 %; eps
+- maze: verdicts differ on 0.5 % of start points on average, at worst 4.3 %; eps
   within 0.043. The maze's learner warm-starts (the tutor, the lookahead, the optimal
   teacher) within the tolerance ``tests/test_warm_start.py`` states: at most 5 % of
   the start points judged differently and eps within 0.05 after any demo.
-- pick-and-place: the warm refit lands in another optimum of the likelihood in 3 of 6
-  sequences (its objective up to 0.56 nats per sample below the cold fit's) and the
-  verdicts then differ on 11.4 % of the plants on average, on all of them at worst.
-  Pick-and-place fits cold (5.9 ms median, against 3.1 ms warm: the saving is not
-  worth verdicts that depend on the order of the demos).
+- pick-and-place: the warm refit lands in another optimum of the likelihood in about
+  half the sequences (its objective up to 0.66 nats per sample below the cold fit's)
+  and the verdicts then differ on 10.9 % of the plants on average, on 87 % at worst;
+  a single warm step from a cold fit (what the lookahead would do) differs on 7.4 % on
+  average, 81 % at worst. Pick-and-place fits cold: warm starts would save about 4 ms
+  per refit at the price of verdicts that depend on the order of the demos.
 
 Run:  .venv/bin/python benchmarks/warm_vs_cold.py [--seeds 6]
 """
