@@ -95,8 +95,7 @@ def run_recorded(repeats: int = 9, n_sets: int = 5, steps=(5, 10, 20)) -> dict:
 
 def run_pickplace(repeats: int = 9, n_sets: int = 3, steps=(5, 10, 20)) -> dict:
     task = PickPlaceTask()
-    conditions, times = task.test_points, task.times
-    batch = task.frame_batch(conditions)
+    conditions = task.test_points
     out = {}
     for m in steps:
         step_times, judge_times = [], []
@@ -118,8 +117,8 @@ def run_pickplace(repeats: int = 9, n_sets: int = 3, steps=(5, 10, 20)) -> dict:
 
             def judge_all(learner=learner, demos=demos, conds=conds):
                 context = task.criteria_context(demos, conds)
-                mean, _ = learner.reproduce_batch(batch, times)
-                return task.judge(mean, conditions, context)
+                attempts = task.realise(learner, conditions)  # tracked from the start pose
+                return task.judge(attempts, conditions, context)
 
             judge_all()
             for _ in range(repeats):
@@ -159,7 +158,7 @@ def main(argv=None) -> None:
         )
     pick = run_pickplace(args.repeats, max(1, min(args.sets, 3)))
     print("\nPick-and-place: add_demo (refit from scratch + 100 plants judged) and the")
-    print("judgement of all 100 plants alone (reproduction + criteria (i)-(iii)), medians")
+    print("judgement of all 100 plants alone (tracked attempts + criteria (i)-(iii)), medians")
     print(f"{'demo M':>7} {'add_demo ms':>12} {'90th pct ms':>12} {'judge 100 ms':>13}")
     for m, r in pick.items():
         print(
