@@ -174,3 +174,43 @@ def test_pickplace_attempts_after_one_and_two_demos_start_at_the_start_pose(pick
         attempts = session.realisations
         assert np.linalg.norm(attempts[:, 0, :3] - task.start, axis=1).max() <= 0.001
         assert np.all((attempts[..., 3] >= 0) & (attempts[..., 3] <= 1))  # the hand's range
+
+
+@pytest.mark.parametrize("bad", ["abc", -1, 0, None])
+@pytest.mark.parametrize("which", ["maze", "pickplace"])
+def test_a_bad_control_cost_in_a_task_file_is_a_named_file_error(tmp_path, which, bad):
+    import json
+
+    from tutor.errors import InvalidFileError
+    from tutor.resources import asset
+    from tutor.tasks.maze import load_layout
+    from tutor.tasks.pickplace import load_scene
+
+    data = json.loads(asset(f"{which}.json").read_text())
+    data["control_cost"] = bad
+    path = tmp_path / "task.json"
+    path.write_text(json.dumps(data))
+    loader = load_layout if which == "maze" else load_scene
+    with pytest.raises(InvalidFileError, match="control_cost in .*task.json must be a finite"):
+        loader(path)
+
+
+@pytest.mark.parametrize(
+    "points, match",
+    [
+        ([[np.nan, np.nan]], "holds NaN or inf"),
+        ([[1.0]], r"shape \(B, 2\)"),
+        ("abc", "holds text"),
+        ([1.0, 2.0, 3.0], r"got shape \(3,\)"),
+    ],
+)
+def test_realise_names_bad_points_and_learners(maze_task, points, match):
+    learner = maze_task.make_learner().fit(
+        [maze_task.preprocess(maze_task.scripted_demo(0, np.random.default_rng(0)))],
+        [maze_task.frames(maze_task.test_points[0])],
+    )
+    with pytest.raises(InvalidParameterError, match=match):
+        maze_task.realise(learner, points)
+    with pytest.raises(InvalidParameterError, match="learner must be a fitted TPGMM"):
+        maze_task.realise(object())
+    assert maze_task.realise(learner, maze_task.test_points[:3]).shape == (3, 200, 2)

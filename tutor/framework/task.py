@@ -19,12 +19,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidFileError, InvalidParameterError
 from ..tpgmm import TPGMM, Frame, FrameBatch
-from ..tpgmm.tracking import DEFAULT_CONTROL_COST, track, tracking_precision
+from ..tpgmm.checks import check_real_array
+from ..tpgmm.tracking import (
+    DEFAULT_CONTROL_COST,
+    check_control_cost,
+    track,
+    tracking_precision,
+)
 from .wording import REASON_WORDS, listing
 
-__all__ = ["Task", "Verdict", "Reason"]
+__all__ = ["Task", "Verdict", "Reason", "control_cost_entry"]
+
+
+def control_cost_entry(data: dict, where: str, default: float) -> float:
+    """A task file's ``control_cost`` (the tracking controller's r), checked: a named
+    :class:`~tutor.errors.InvalidFileError` that names the file if it is no finite
+    positive number."""
+    try:
+        return check_control_cost(data.get("control_cost", default), f"control_cost in {where}")
+    except InvalidParameterError as exc:
+        raise InvalidFileError(f"{exc}; fix or remove the entry") from None
 
 
 @dataclass(frozen=True)
@@ -170,6 +186,18 @@ class Task(ABC):
     #: the others (a gripper) are commands it follows as the model gives them
     moving_dims: int | None = None
 
+    def check_points(self, points, name: str = "points") -> np.ndarray:
+        """``points`` as a finite float array (B, c) like the rows of :attr:`test_points`."""
+        expected = np.asarray(self.test_points).shape[1:]
+        shape = ", ".join(map(str, ("B", *expected)))
+        wanted = f"a finite array of shape ({shape}) like task.test_points"
+        array = check_real_array(points, name, InvalidParameterError, wanted)
+        if array.ndim != 1 + len(expected) or array.shape[1:] != expected:
+            raise InvalidParameterError(f"{name} must be {wanted}, got shape {array.shape}")
+        if not np.isfinite(array).all():
+            raise InvalidParameterError(f"{name} must be {wanted}; it holds NaN or inf")
+        return array
+
     @abstractmethod
     def start_states(self, points) -> np.ndarray:
         """Where the robot is when it starts each of ``points``, at rest: shape (B, n)
@@ -190,7 +218,15 @@ class Task(ABC):
         the robot is, whatever the regression's first mean; the criteria judge this
         executed path.
         """
-        points = self.test_points if points is None else points
+        if points is None or points is self.test_points:  # B^ itself: its frames are cached
+            points = self.test_points
+        else:
+            points = self.check_points(points)
+        if not callable(getattr(learner, "reproduce_batch", None)):
+            raise InvalidParameterError(
+                f"learner must be a fitted TPGMM (task.make_learner().fit(...)), got "
+                f"{type(learner).__name__}"
+            )
         mean, cov = learner.reproduce_batch(self.frame_batch(points), self.times)
         n = mean.shape[-1] if self.moving_dims is None else self.moving_dims
         precision = tracking_precision(cov[..., :n, :n])

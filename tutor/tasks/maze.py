@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import InvalidDemoError
 from ..fileio import read_json
-from ..framework.task import Reason, Task, Verdict
+from ..framework.task import Reason, Task, Verdict, control_cost_entry
 from ..resources import asset
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
 from .paths import minimum_jerk_through
@@ -180,7 +180,7 @@ def load_layout(path=None) -> MazeLayout:
         grid_margin=float(grid.get("margin", 0.005)),
         n_components=int(data.get("n_components", 11)),
         n_samples=int(data.get("n_samples", 200)),
-        control_cost=float(data.get("control_cost", 1e-2)),
+        control_cost=control_cost_entry(data, f"maze layout {path}", 1e-2),
     )
 
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import InvalidDemoError, InvalidParameterError
 from ..fileio import read_json
-from ..framework.task import Reason, Task, Verdict
+from ..framework.task import Reason, Task, Verdict, control_cost_entry
 from ..resources import asset
 from ..robot.feasibility import first_bad_sample
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
@@ -99,7 +99,8 @@ class PickPlaceScene:
 
 def load_scene(path=None) -> PickPlaceScene:
     """Read the scene from JSON (default: the bundled ``assets/pickplace.json``)."""
-    data = read_json(DEFAULT_SCENE_PATH if path is None else Path(path), "pick-and-place scene")
+    path = DEFAULT_SCENE_PATH if path is None else Path(path)
+    data = read_json(path, "pick-and-place scene")
     tray, plant, bin_ = data["tray"], data["plant"], data["bin"]
     arr = np.asarray
     return PickPlaceScene(
@@ -125,7 +126,7 @@ def load_scene(path=None) -> PickPlaceScene:
         reg_covar=float(data.get("reg_covar", 1e-4)),
         warm_start=bool(data.get("warm_start", False)),
         n_samples=int(data.get("n_samples", 200)),
-        control_cost=float(data.get("control_cost", 1e-4)),
+        control_cost=control_cost_entry(data, f"pick-and-place scene {path}", 1e-4),
         realisation_seconds=float(data.get("realisation_seconds", 25.0)),
         run_seconds=float(data.get("run_seconds", 900.0)),
     )

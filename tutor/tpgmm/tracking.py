@@ -70,8 +70,15 @@ import numpy as np
 from scipy.linalg import solveh_banded
 
 from ..errors import InvalidParameterError
+from .checks import check_number
 
-__all__ = ["DEFAULT_CONTROL_COST", "track", "tracking_gains", "tracking_precision"]
+__all__ = [
+    "DEFAULT_CONTROL_COST",
+    "check_control_cost",
+    "track",
+    "tracking_gains",
+    "tracking_precision",
+]
 
 #: r of R = r I when a task does not give its own (the tasks' choices, and how they were
 #: measured, are in their asset files)
@@ -83,6 +90,11 @@ def _plant(d: int, dt: float):
     A = np.block([[eye, dt * eye], [zero, eye]])
     B = np.vstack([zero, dt * eye])
     return A, B
+
+
+def check_control_cost(value, name: str = "control_cost") -> float:
+    """r of R = r I as a finite positive float, or a named error saying so."""
+    return check_number(value, name, strict=True)
 
 
 def _check(mean, precision, start, dt, control_cost):
@@ -105,8 +117,7 @@ def _check(mean, precision, start, dt, control_cost):
         raise InvalidParameterError("mean, precision and start must be finite")
     if not (np.isfinite(dt) and dt > 0):
         raise InvalidParameterError(f"dt must be a positive number of seconds, got {dt!r}")
-    if not (np.isfinite(control_cost) and control_cost > 0):
-        raise InvalidParameterError(f"control_cost must be positive, got {control_cost!r}")
+    control_cost = check_control_cost(control_cost)
     if T < 2:
         raise InvalidParameterError(f"a path to track needs at least 2 time steps, got {T}")
     return mean, _shared(precision), start, float(dt), float(control_cost)
