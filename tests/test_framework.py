@@ -392,3 +392,21 @@ def test_a_copied_session_shares_its_task():
     session = TeachingSession(task)
     twin = copy.deepcopy(session)
     assert twin.task is task and twin is not session
+
+
+def test_verdict_words_come_on_first_use_and_travel_with_it(maze_task):
+    """A Verdict words its causes only when read (studies read ``passed`` alone), the
+    same words as before; a copy or a pickle carries the words, not the task."""
+    import copy
+    import pickle
+
+    s = TeachingSession(maze_task)
+    s.add_demo(demo_from(maze_task, (0.03, 0.03)))
+    verdict = maze_task.judge(s.realisations, maze_task.test_points)
+    assert "reasons" not in verdict.__dict__  # nothing worded yet
+    words = tuple(maze_task.reason_words(c) for c in verdict.causes)
+    assert verdict.reasons == words and any(words)
+    for other in (copy.deepcopy(verdict), pickle.loads(pickle.dumps(verdict))):
+        assert other.words is None and other.reasons == words
+        np.testing.assert_array_equal(other.passed, verdict.passed)
+        assert other.causes == verdict.causes

@@ -175,6 +175,22 @@ def test_two_workers_give_the_same_choice(maze_task, tiny):
     np.testing.assert_array_equal(one.scores, two.scores)
 
 
+def test_scoring_here_stops_at_the_first_demo_reaching_one(maze_task, tiny):
+    """On one process the candidates are scored one at a time and scoring stops at the
+    first reaching eps = 1: the same choice as scoring every one, fewer refits."""
+    state = optimal.State.empty(maze_task)
+    for p in (1, 2):  # the greedy path's first two demos: its third reaches eps = 1
+        state, _, _ = state.added(maze_task, tiny.demos[p], tiny.demo_points[p])
+    bank = tiny.subset([0, 1, 3, 0, 1, 3, 2, 0])  # the third reaches eps = 1 (and the sixth)
+    choice = optimal.best_next(maze_task, state, bank, workers=1)
+    assert choice.position == 2 and choice.efficacy == 1.0
+    assert np.isfinite(choice.scores[:3]).all() and np.isnan(choice.scores[3:]).all()
+    every = [optimal.efficacy_after(maze_task, state, d, c)[0] for d, c in
+             zip(bank.demos, bank.demo_points, strict=True)]
+    assert int(np.argmax(every)) == choice.position and max(every) == choice.efficacy
+    np.testing.assert_array_equal(choice.scores[:3], every[:3])
+
+
 # ---------------------------------------------------------------- the bundled reference
 
 

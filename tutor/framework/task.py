@@ -15,7 +15,9 @@ through this interface.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -94,7 +96,26 @@ class Verdict:
 
     passed: np.ndarray
     causes: tuple[tuple[Reason, ...], ...]
-    reasons: tuple[str, ...]
+    #: turns one entry of ``causes`` into words (the task's :meth:`Task.reason_words`)
+    words: Callable[[tuple], str] = field(default=None, repr=False, compare=False)
+
+    @cached_property
+    def reasons(self) -> tuple[str, ...]:
+        # worded on first use: the lookahead and the studies judge thousands of
+        # realisations a second and read only ``passed``
+        if self.words is None:
+            return tuple("" for _ in self.causes)
+        return tuple(self.words(c) for c in self.causes)
+
+    def __reduce__(self):
+        # copied or sent to another process with its words, not with the task
+        return (_worded_verdict, (self.passed, self.causes, self.reasons))
+
+
+def _worded_verdict(passed, causes, reasons) -> Verdict:
+    verdict = Verdict(passed, causes)
+    verdict.__dict__["reasons"] = tuple(reasons)
+    return verdict
 
 
 class Task(ABC):
@@ -156,9 +177,7 @@ class Task(ABC):
         """A :class:`Verdict` of ``passed`` (B,) and ``causes`` (B tuples of
         :class:`Reason`), with the words."""
         causes = tuple(tuple(c) for c in causes)
-        return Verdict(
-            np.asarray(passed, dtype=bool), causes, tuple(self.reason_words(c) for c in causes)
-        )
+        return Verdict(np.asarray(passed, dtype=bool), causes, self.reason_words)
 
     @property
     @abstractmethod

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import copy
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -157,6 +157,14 @@ class State:
     demos: list
     demo_points: list
     learner: object
+    #: the frames of each demo's test point (made on first use, see :meth:`frames`)
+    demo_frames: list | None = field(default=None, repr=False, compare=False)
+
+    def frames(self, task) -> list:
+        """``task.frames`` of each demo's test point, made once per state."""
+        if self.demo_frames is None or len(self.demo_frames) != len(self.demo_points):
+            self.demo_frames = [task.frames(c) for c in self.demo_points]
+        return self.demo_frames
 
     @classmethod
     def empty(cls, task) -> State:
@@ -171,7 +179,9 @@ class State:
     def added(self, task, demo, point) -> tuple[State, float, np.ndarray]:
         """The state after ``demo``, its eps and the passed mask (n,)."""
         eps, passed, learner = efficacy_after(task, self, demo, point)
-        return State([*self.demos, demo], [*self.demo_points, point], learner), eps, passed
+        frames = [*self.frames(task), task.frames(point)]
+        state = State([*self.demos, demo], [*self.demo_points, point], learner, frames)
+        return state, eps, passed
 
 
 def efficacy_after(task, state: State, demo, point):
@@ -189,7 +199,7 @@ def efficacy_after(task, state: State, demo, point):
     demos = [*state.demos, demo]
     points = np.array([*state.demo_points, point], dtype=float)
     learner = copy.deepcopy(state.learner)
-    learner.fit(demos, [task.frames(c) for c in points])
+    learner.fit(demos, [*state.frames(task), task.frames(point)])
     context = task.criteria_context(demos, points)
     passed = judged(task, task.realise(learner), context)
     return float(passed.mean()), passed, learner
@@ -271,7 +281,13 @@ class Scorer:
         """
         positions = np.asarray(positions, dtype=int)
         out = np.full(len(positions), np.nan)
-        chunk = max(1, min(12, len(positions) // (4 * self.workers) or 1))
+        # here, one at a time: scoring stops at the very first demo reaching stop_at
+        # (the answer is the same for any chunk: the first best wins); on the workers,
+        # chunks big enough to keep both busy
+        if self._pool is None:
+            chunk = 1
+        else:
+            chunk = max(1, min(12, len(positions) // (4 * self.workers) or 1))
         parts = [positions[k : k + chunk] for k in range(0, len(positions), chunk)]
         if self._pool is None:
             futures = None
