@@ -149,6 +149,30 @@ def test_an_hf_run_records_hint_following_and_round_trips(pickplace_task, tmp_pa
     assert nf.attempt.demos[0].followed_rule is None
 
 
+def test_a_plant_outside_the_candidates_did_not_follow_the_hint_and_costs_no_lookahead(
+    pickplace_task, monkeypatch
+):
+    """After a demo the hint is one of hint_candidates: a plant outside them is recorded
+    as not following it without the lookahead running; one inside asks the lookahead."""
+    import tutor.tasks.hint as hint_module
+
+    run = demonstrated(pickplace_task, [44])
+    candidates = hint_candidates(pickplace_task, run).tolist()
+    hinted = run.hint().plant  # what the lookahead picks, for the check below
+    run._hint = None  # forget it: the records below must not lean on it
+    asked = []
+    real = hint_module.best_next
+    monkeypatch.setattr(
+        hint_module, "best_next", lambda *a, **k: asked.append(1) or real(*a, **k)
+    )
+    outside = next(p for p in range(100) if p not in candidates and p != 44)
+    run.demonstrate(outside, rng=np.random.default_rng(1))
+    assert run.attempt.demos[-1].followed_rule is False and asked == []
+    second = demonstrated(pickplace_task, [44])
+    second.demonstrate(hinted, rng=np.random.default_rng(1))
+    assert second.attempt.demos[-1].followed_rule is True and asked == [1]
+
+
 # ---------------------------------------------------------------- the simulated teacher
 
 

@@ -21,6 +21,8 @@ _THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS
 
 #: the active threadpoolctl limit of this process (kept so it stays in force)
 _LIMITER = None
+#: (process id, modules loaded) when the limit was last set (see one_blas_thread)
+_LIMITED: tuple[int, int] | None = None
 
 
 def can_fork() -> bool:
@@ -29,13 +31,21 @@ def can_fork() -> bool:
 
 
 def one_blas_thread() -> None:
-    """One BLAS thread in this process: the same arithmetic here and in every worker."""
-    global _LIMITER
+    """One BLAS thread in this process: the same arithmetic here and in every worker.
+
+    Limiting scans the loaded libraries (about 3 ms), so it is redone only in a new
+    process or once a module has been imported since (it may have loaded a BLAS).
+    """
+    global _LIMITER, _LIMITED
+    done = (os.getpid(), len(sys.modules))
+    if _LIMITED == done:
+        return
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:  # pragma: no cover - numpy then uses its default threads
         return
     _LIMITER = threadpool_limits(1)
+    _LIMITED = (os.getpid(), len(sys.modules))
 
 
 def init_worker() -> None:

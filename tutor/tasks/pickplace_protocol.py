@@ -52,7 +52,7 @@ from ..errors import InvalidParameterError, TutorError
 from ..framework import RunOverError, TeachingRun
 from ..framework.protocol import experiment
 from ..framework.record import check_given, utc_now
-from .hint import Hint, next_demo_hint
+from .hint import Hint, hint_candidates, next_demo_hint
 from .kinesthetic import CARRY_SECONDS, PAUSE_SECONDS, REACH_SECONDS
 from .pickplace import PickPlaceTask
 from .recording import check_recording
@@ -390,8 +390,18 @@ class PickPlaceRun(TeachingRun):
 
     def _followed_hint(self, plant: int) -> bool | None:
         """Whether ``plant`` is the hinted one; None when no hint could be computed (the
-        trainee then had none to follow, and teaching goes on without it)."""
+        trainee then had none to follow, and teaching goes on without it).
+
+        After a demo the hint is one of :func:`~tutor.tasks.hint.hint_candidates`, so a
+        plant outside them did not follow it, whatever the lookahead would pick: the
+        answer is known without the lookahead's refits (what a simulated teacher who
+        goes their own way costs).
+        """
         try:
+            cached = getattr(self, "_hint", None)
+            if (cached is None or cached[0] != self._hint_key()) and self.session.n_demos:
+                if plant not in hint_candidates(self.task, self.session).tolist():
+                    return False
             return plant == self.hint().plant
         except TutorError:
             return None
