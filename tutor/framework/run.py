@@ -63,7 +63,7 @@ class RunOverError(TutorError, RuntimeError):
 
 
 def _floats(a) -> tuple[float, ...]:
-    return tuple(float(v) for v in np.asarray(a, dtype=float).ravel())
+    return tuple(np.asarray(a, dtype=float).ravel().tolist())
 
 
 def _recording(recording) -> np.ndarray:
@@ -380,7 +380,7 @@ class TeachingRun:
         if self.policy.adaptive:
             shown = record.shown  # the selector's picks, kept so that a replay shows them
         demo = Demo(
-            samples=tuple(_floats(row) for row in self.session._demos[-1]),
+            samples=tuple(map(tuple, np.asarray(self.session._demos[-1], float).tolist())),
             point=None if point is None else _floats(self.session.demo_points[-1]),
             shown=None if shown is None else tuple(int(i) for i in np.ravel(shown)),
             seconds=None if seconds is None else float(seconds),
