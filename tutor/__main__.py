@@ -10,6 +10,8 @@ class       read a class's saved runs (a folder with one subfolder or one zip pe
             trainee, or a zip of it), list every file not counted and why, and run the
             paper's statistics on the class beside the paper's numbers and a simulated
             class of its size.
+calibrate   fit the simulated teachers' population and the maze's blocks to the paper
+            by ABC-SMC, check them on the results held out, and write the report.
 
 Examples::
 
@@ -18,6 +20,7 @@ Examples::
     python -m tutor robustness --experiment 1 --seeds 10 --out results/
     python -m tutor adaptive --seeds 10 --out results_adaptive/
     python -m tutor class /srv/lfd-class --experiment 1 --out class_results/
+    python -m tutor calibrate --out calibration/
 """
 
 from __future__ import annotations
@@ -162,6 +165,34 @@ def _parser() -> argparse.ArgumentParser:
     )
     ada.add_argument("--no-progress", action="store_true", help="no progress bar")
     ada.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
+    cal = sub.add_parser(
+        "calibrate",
+        help="fit the simulated teachers and the maze to the paper (ABC-SMC) and check them",
+    )
+    cal.add_argument("--out", default="calibration", help="folder for the files")
+    cal.add_argument(
+        "--population-size", type=_whole_number(2, 10_000, " particles"), default=None,
+        help="particles per ABC-SMC generation (default 60)",
+    )
+    cal.add_argument(
+        "--generations", type=_whole_number(1, 100, " generations"), default=None,
+        help="ABC-SMC generations (default 5)",
+    )
+    cal.add_argument(
+        "--draws", type=_whole_number(2, 10_000, " draws"), default=None,
+        help="posterior draws of the predictive check (default 20)",
+    )
+    cal.add_argument(
+        "--seed", type=_whole_number(0, MAX_SEED), default=0, help="random seed (default 0)"
+    )
+    cal.add_argument(
+        "--workers", type=_whole_number(1), default=None, help="processes (default: all cores)"
+    )
+    cal.add_argument("--scheduler", type=_scheduler, default=None, help=SCHEDULER_HELP)
+    cal.add_argument(
+        "--quick", action="store_true",
+        help="a reduced test run (6 particles x 2 generations, small cohorts), not a result",
+    )
     cls = sub.add_parser(
         "class", help="the paper's statistics on a class's own saved runs"
     )
@@ -272,13 +303,43 @@ def adaptive_command(args) -> None:
     print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
 
 
+def calibrate_command(args) -> None:
+    """``lfd-tutor calibrate``: ABC-SMC, the predictive check, the report and the files."""
+    import dataclasses
+
+    from .study import calibration
+    from .study.report import check_out_dir
+
+    budget = calibration.QUICK_BUDGET if args.quick else calibration.FULL_BUDGET
+    chosen = {
+        k: v for k, v in (("population_size", args.population_size),
+                          ("generations", args.generations), ("draws", args.draws))
+        if v is not None
+    }
+    budget = dataclasses.replace(budget, **chosen)
+    out = check_out_dir(args.out)  # before any work
+    found = calibration.calibrate(
+        budget, seed=args.seed, workers=args.workers, scheduler=args.scheduler, folder=out
+    )
+    predicted = calibration.predictive(
+        found, seed=args.seed + 1, workers=args.workers, scheduler=args.scheduler
+    )
+    table = calibration.report(found, predicted)
+    print(calibration.format_report(found, table))
+    paths = calibration.save(found, predicted, table, out)
+    print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
+
+
+COMMANDS = {"class": class_command, "adaptive": adaptive_command, "calibrate": calibrate_command}
+
+
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
-    if args.command in ("class", "adaptive"):
+    if args.command in COMMANDS:
         from .errors import TutorError
 
         try:
-            (class_command if args.command == "class" else adaptive_command)(args)
+            COMMANDS[args.command](args)
         except TutorError as exc:
             print(f"error ({type(exc).__name__}): {exc}", file=sys.stderr)
             return 2

@@ -25,17 +25,19 @@ the other.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidDemoError
+from ..errors import InvalidDemoError, InvalidParameterError
 from ..fileio import read_json
 from ..framework.task import Reason, Task, Verdict, control_cost_entry
 from ..resources import asset
 from ..tpgmm import TPGMM, Frame, FrameBatch, check_demo
+from ..tpgmm.checks import check_number
 from .paths import minimum_jerk_through
 
 __all__ = ["Box", "MazeLayout", "MazeTask", "load_layout", "DEFAULT_LAYOUT_PATH"]
@@ -132,6 +134,47 @@ class MazeLayout:
         b = np.concatenate([starts[:, None, :], np.broadcast_to(fixed, (B, P - 1, 2))], axis=1)
         eye = np.broadcast_to(np.eye(2), (B, P, 2, 2)).copy()
         return FrameBatch(eye, eye.copy(), b)
+
+    def with_obstacle_reach(self, reach: float) -> MazeLayout:
+        """This maze with both blocks jutting ``reach`` (m) in from their walls.
+
+        The paper gives X, I and the target but not the two blocks' sizes or places; the
+        calibration (:mod:`tutor.study.calibration`) chooses how far they jut in. Block 1
+        keeps its left wall and block 2 its right one, both keep their heights, and the
+        guide points stay in the middle of the gaps at their distances from the blocks,
+        so ``with_obstacle_reach`` of the bundled reach gives the bundled layout back.
+
+        Raises
+        ------
+        InvalidParameterError
+            Not two wall blocks, or ``reach`` not a number leaving a gap of at least
+            1 cm on the other side.
+        """
+        width = self.workspace.x1 - self.workspace.x0
+        reach = check_number(reach, "the obstacles' reach (m)")
+        if len(self.obstacles) != 2 or len(self.guide_points) != 4:
+            raise InvalidParameterError(
+                "with_obstacle_reach needs the two wall blocks and four guide points of the "
+                "paper's maze"
+            )
+        if not 0.01 <= reach <= width - 0.01:
+            raise InvalidParameterError(
+                f"the obstacles' reach must leave a gap of at least 1 cm: from 0.01 to "
+                f"{width - 0.01:.2f} m, got {reach!r}"
+            )
+        left, right = self.obstacles
+        x0, x1 = self.workspace.x0, self.workspace.x1
+        new_left = dataclasses.replace(left, x0=x0, x1=x0 + reach)
+        new_right = dataclasses.replace(right, x0=x1 - reach, x1=x1)
+        guides = np.array(self.guide_points, dtype=float)
+        guides[:2, 0] = (x0 + reach + x1) / 2  # the gap right of block 1
+        guides[2:, 0] = (x0 + x1 - reach) / 2  # the gap left of block 2
+        return dataclasses.replace(self, obstacles=(new_left, new_right), guide_points=guides)
+
+    @property
+    def obstacle_reach(self) -> float:
+        """How far block 1 juts in from the left wall (m)."""
+        return float(self.obstacles[0].x1 - self.obstacles[0].x0)
 
     def reference_path(self, start, rng=None, jitter: float = 0.0, n_samples=None) -> np.ndarray:
         """A smooth scripted demonstration from ``start`` through the gaps to the target.

@@ -1,0 +1,127 @@
+"""The calibration of the simulated teachers and the maze (tutor.study.calibration)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tutor.__main__ import main
+from tutor.errors import InvalidParameterError
+from tutor.study import calibration
+from tutor.study.cohort import StudySettings, cohort_task
+from tutor.tasks.maze import MazeTask, load_layout
+from tutor.teachers.traits import DEFAULT_POPULATION
+
+
+def test_the_bundled_reach_gives_the_bundled_maze_back():
+    layout = load_layout()
+    same = layout.with_obstacle_reach(layout.obstacle_reach)
+    assert same.obstacles == layout.obstacles
+    np.testing.assert_allclose(same.guide_points, layout.guide_points, atol=1e-12)
+
+
+def test_a_longer_reach_narrows_both_gaps_and_the_paths_still_pass():
+    task = MazeTask(load_layout().with_obstacle_reach(0.15))
+    left, right = task.layout.obstacles
+    assert left.x1 == pytest.approx(0.15) and right.x0 == pytest.approx(0.05)
+    assert task.layout.obstacle_reach == pytest.approx(0.15)
+    rng = np.random.default_rng(0)
+    for i in (0, 69, 139):  # a careful hand still passes through both gaps
+        demo = task.preprocess(task.scripted_demo(i, rng))
+        assert task.judge_demo(demo, task.test_points[i]).passed[0]
+
+
+@pytest.mark.parametrize("reach", [0.0, 0.195, -0.1, float("nan"), "0.12", True])
+def test_an_impossible_reach_is_named(reach):
+    with pytest.raises(InvalidParameterError, match="reach"):
+        load_layout().with_obstacle_reach(reach)
+
+
+def test_the_study_settings_build_the_maze_with_the_reach():
+    task = cohort_task("maze", StudySettings(maze_reach=0.145))
+    assert task.layout.obstacle_reach == pytest.approx(0.145)
+    assert cohort_task("maze", StudySettings()).layout.obstacle_reach == pytest.approx(0.13)
+
+
+def test_every_parameter_lands_where_it_says():
+    theta = {name: p.from_unit(0.25) for name, p in calibration.PARAMETERS.items()}
+    population, settings = calibration.apply(theta)
+    assert settings.maze_reach == pytest.approx(theta["maze_reach"])
+    assert population.enough_median_maze == pytest.approx(theta["enough_median_maze"])
+    assert population.satisfaction_low == pytest.approx(theta["satisfaction_low"])
+    mean_repeat = population.repeat_a / (population.repeat_a + population.repeat_b)
+    assert mean_repeat == pytest.approx(theta["repeat_mean"])
+    mean_slip = population.slip_a / (population.slip_a + population.slip_b)
+    assert mean_slip == pytest.approx(theta["slip_mean"])
+    middle = (population.setup_low + population.setup_high) / 2
+    assert middle == pytest.approx(theta["setup_middle"])
+    assert population.aim_low == DEFAULT_POPULATION.aim_low  # what is not free stays
+    for p in calibration.PARAMETERS.values():  # the unit scale round-trips
+        for u in (0.0, 0.3, 1.0):
+            assert p.to_unit(p.from_unit(u)) == pytest.approx(u)
+
+
+@pytest.mark.parametrize(
+    "theta, match",
+    [({"nonsense": 1.0}, "unknown"), ({"maze_reach": 0.5}, "prior"),
+     ({"enough_median_maze": 1.0}, "prior")],
+)
+def test_a_bad_parameter_set_is_named(theta, match):
+    with pytest.raises(InvalidParameterError, match=match):
+        calibration.apply(theta)
+
+
+def test_the_statistics_are_the_papers_and_split_fitted_from_held_out():
+    stats = calibration.STATISTICS
+    assert stats["median eta VF"].value == 0.134 and stats["median eta VF"].fitted
+    assert stats["NF did well"].value == 7 and stats["F"].value == 7.952
+    assert stats["undemonstrated BF"].value == 827 and not stats["undemonstrated BF"].fitted
+    held = [s for s in stats.values() if not s.fitted]
+    assert len(held) == 15 and all(s.experiment == 2 for s in held)
+    perfect = {n: s.value for n, s in stats.items()}
+    assert calibration.distance(perfect) == 0.0
+    off = dict(perfect, **{"median eta NF": perfect["median eta NF"] * 1.25})
+    assert calibration.distance(off) == pytest.approx(1.0)
+    assert calibration.distance(dict(perfect, F=math.nan)) == pytest.approx(4.0)
+
+
+def test_summary_statistics_scale_counts_to_the_papers_groups():
+    exp2 = pd.DataFrame({
+        "condition": ["NF"] * 6, "run": [1, 2, 3] * 2, "eta": [0.1, 0.2, 0.3] * 2,
+        "errors": [1, 0, 0, 0, 0, 1], "undemonstrated": [10] * 6, "ambiguous": [2] * 6,
+    })
+    stats = calibration.summary_statistics(None, exp2)
+    assert stats["mean eta NF"] == pytest.approx(0.2)
+    assert stats["third-run eta NF"] == pytest.approx(0.3)
+    assert stats["errors NF"] == pytest.approx(2 * 27 / 6)  # 2 in 6 runs, of 27
+    assert stats["undemonstrated NF"] == pytest.approx(270)
+
+
+def test_a_bad_budget_is_named():
+    with pytest.raises(InvalidParameterError, match="population_size"):
+        calibration.calibrate(calibration.Budget(population_size=1))
+
+
+def test_the_calibrate_command_runs_end_to_end_on_the_quick_budget(tmp_path, capsys):
+    out = tmp_path / "cal"
+    assert main(["calibrate", "--quick", "--workers", "1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "held-out statistics inside their 90 % interval" in text and "quick" in text
+    summary = json.loads((out / "calibration_summary.json").read_text(encoding="utf-8"))
+    assert set(summary["point"]) == set(calibration.PARAMETERS)
+    for name, p in calibration.PARAMETERS.items():
+        assert p.low <= summary["point"][name] <= p.high
+    posterior = pd.read_csv(out / "calibration_posterior.csv")
+    assert len(posterior) == calibration.QUICK_BUDGET.population_size
+    assert posterior.weight.sum() == pytest.approx(1.0)
+    generations = pd.read_csv(out / "calibration_generations.csv")
+    assert len(generations) == calibration.QUICK_BUDGET.generations
+    assert (np.diff(generations.epsilon) <= 0).all()  # the tolerance shrinks
+    predictive = pd.read_csv(out / "calibration_predictive.csv")
+    assert len(predictive) == calibration.QUICK_BUDGET.draws
+    assert {"mean eta BF", "undemonstrated SF", "median eta VR"} <= set(predictive.columns)
+    assert len(summary["statistics"]) == len(calibration.STATISTICS)

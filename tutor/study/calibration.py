@@ -1,0 +1,619 @@
+r"""Calibrating the simulated teachers (and the maze's free geometry) to the paper's people.
+
+The simulated teachers of :mod:`tutor.teachers` draw their human factors Q from a
+:class:`~tutor.teachers.traits.Population`; the maze's two blocks are ours to size
+(the paper gives X, I, the target and "two obstacle blocks"). This module fits both to
+the paper's results by simulation-based inference, and checks the fit on results it did
+not see.
+
+**Free parameters** :math:`\theta` (:data:`PARAMETERS`, a registry: name -> prior and
+where it goes). Nothing is per condition: one population and one maze serve every
+condition of both experiments.
+
+**Summary statistics** :math:`s(\theta)` (:data:`STATISTICS`): what the paper reports
+that a simulated cohort can give back. The *fitted* ones are Experiment 1 (the three
+median :math:`\eta`, the number of NF teachers who did well, the ANOVA's F) and
+Experiment 2's NF condition (mean and third-run :math:`\eta`, its failure counts); the
+*held-out* ones are the rest of Experiment 2 (RF, BF and SF: mean and third-run
+:math:`\eta`, the failure table). Counts are scaled to the paper's group sizes.
+
+**Method: ABC-SMC** (approximate Bayesian computation by sequential Monte Carlo,
+Beaumont et al. 2009, with `pyabc <https://pyabc.readthedocs.io>`_). The simulator has
+no likelihood we can write down, a run of it is a whole cohort (seconds), and the
+parameters mix counts, rates and a length. ABC-SMC needs only simulations and returns a
+weighted sample of the posterior :math:`p(\theta \mid d(s(\theta), s_{paper}) \le
+\epsilon_t)`, with a shrinking tolerance :math:`\epsilon_t`: exactly what the
+posterior predictive check needs. (Bayesian optimisation of the same distance with
+optuna would find its minimum with fewer runs, but gives a point, not a posterior.)
+The distance is
+
+.. math::
+
+    d(s, s^*) = \Big( \sum_{j \in \text{fitted}} \big( (s_j - s^*_j) / \sigma_j \big)^2
+    \Big)^{1/2}
+
+with :math:`\sigma_j` written next to each statistic (the size of a difference that
+matters: a quarter of the paper's value for the rates, more for the noisier counts).
+
+**On the executor.** Each simulated study spreads its teachers over the
+:class:`tutor.engine.Engine` (a local process pool, or a Dask cluster with
+``scheduler=``), so a calibration scales out like the cohorts do, and gives the same
+numbers on any executor for the same seed.
+
+**Validation.** :func:`predictive` draws parameter sets from the posterior, simulates
+both experiments in full with fresh seeds and gives every statistic's 90 % posterior
+predictive interval; :func:`report` says, statistic by statistic, whether the paper's
+value lies inside it, separately for the fitted and the held-out ones.
+
+Command line: ``lfd-tutor calibrate --out DIR`` (``--quick`` for a reduced budget).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .. import paper
+from ..engine import Engine
+from ..errors import InvalidParameterError
+from ..fileio import atomic_write_text
+from ..teachers.traits import DEFAULT_POPULATION, Population
+from .cohort import StudySettings, run_experiment
+
+__all__ = [
+    "Parameter",
+    "Statistic",
+    "PARAMETERS",
+    "STATISTICS",
+    "Budget",
+    "QUICK_BUDGET",
+    "FULL_BUDGET",
+    "Calibration",
+    "apply",
+    "summary_statistics",
+    "simulate",
+    "distance",
+    "calibrate",
+    "predictive",
+    "report",
+    "save",
+]
+
+
+# ---------------------------------------------------------------- parameters
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One free parameter: a uniform prior on [low, high] (on the log scale if ``log``).
+
+    ``put(population, settings, value)`` returns the population and study settings with
+    the value in place.
+    """
+
+    name: str
+    low: float
+    high: float
+    why: str
+    put: Callable = field(repr=False, compare=False)
+    log: bool = False
+
+    def to_unit(self, value: float) -> float:
+        """The value's place in the prior's range, 0 .. 1."""
+        if self.log:
+            return (math.log(value) - math.log(self.low)) / (
+                math.log(self.high) - math.log(self.low)
+            )
+        return (value - self.low) / (self.high - self.low)
+
+    def from_unit(self, u: float) -> float:
+        """The value at place ``u`` (0 .. 1) of the prior's range."""
+        if self.log:
+            return math.exp(math.log(self.low) + u * (math.log(self.high) - math.log(self.low)))
+        return self.low + u * (self.high - self.low)
+
+
+def _field(name: str):
+    def put(population, settings, value):
+        return dataclasses.replace(population, **{name: float(value)}), settings
+
+    return put
+
+
+def _reach(population, settings, value):
+    return population, dataclasses.replace(settings, maze_reach=float(value))
+
+
+def _satisfaction(population, settings, value):
+    return dataclasses.replace(population, satisfaction_low=float(value)), settings
+
+
+def _setup(population, settings, value):  # a 50 s wide uniform around the middle
+    low = max(0.0, float(value) - 25.0)
+    return dataclasses.replace(population, setup_low=low, setup_high=float(value) + 25.0), settings
+
+
+def _beta_mean(a: str, b: str, concentration: float):
+    def put(population, settings, value):
+        value = float(value)
+        return dataclasses.replace(
+            population, **{a: concentration * value, b: concentration * (1 - value)}
+        ), settings
+
+    return put
+
+
+#: the free parameters (name -> Parameter), with their priors and why
+PARAMETERS: dict[str, Parameter] = {
+    p.name: p
+    for p in (
+        Parameter(
+            "maze_reach", 0.10, 0.16,
+            "how far each maze block juts in (m): the bundled 13 cm in the middle; at "
+            "10 cm the gaps are as wide as the blocks, at 16 cm a 4 cm gap is left (a hand "
+            "can still pass it in one stroke)",
+            _reach,
+        ),
+        Parameter(
+            "enough_median_maze", 2.0, 9.0,
+            "the demos a novice believes the maze needs: from 2 (the paper: unguided "
+            "teachers 'underestimate') to 9 (more than its optimal teacher needs)",
+            _field("enough_median_maze"),
+        ),
+        Parameter(
+            "spread_median_maze", 0.08, 0.5,
+            "how widely a novice's own maze demos scatter (unit box): from clustered to "
+            "half the start zone; log scale",
+            _field("spread_median_maze"), log=True,
+        ),
+        Parameter(
+            "satisfaction_low", 0.7, 0.97,
+            "the lowest share of B^ a teacher must believe works before stopping (the "
+            "highest is 1)",
+            _satisfaction,
+        ),
+        Parameter(
+            "aim_high", 0.04, 0.15,
+            "the least precise aim in the population (unit box, standard deviation; the "
+            "most precise is 0.02)",
+            _field("aim_high"),
+        ),
+        Parameter(
+            "enough_median_pickplace", 4.0, 11.0,
+            "the demos a novice believes pick-and-place needs (the paper's NF numbers "
+            "imply about 7)",
+            _field("enough_median_pickplace"),
+        ),
+        Parameter(
+            "spread_median_pickplace", 0.2, 0.8,
+            "how widely a novice's own plants scatter over the tray (unit box); log scale",
+            _field("spread_median_pickplace"), log=True,
+        ),
+        Parameter(
+            "repeat_mean", 0.03, 0.35,
+            "the mean chance that a demo repeats one already given (beta, concentration "
+            "10): the paper's ambiguous demos",
+            _beta_mean("repeat_a", "repeat_b", 10.0),
+        ),
+        Parameter(
+            "slip_mean", 0.005, 0.08,
+            "the mean chance that a demo slips (beta, concentration 50): the paper's "
+            "demonstration errors",
+            _beta_mean("slip_a", "slip_b", 50.0),
+        ),
+        Parameter(
+            "setup_middle", 30.0, 110.0,
+            "seconds per pick-and-place demo besides the motion (uniform, 50 s wide, "
+            "around this middle)",
+            _setup,
+        ),
+    )
+}
+
+
+def apply(theta: dict, population: Population = DEFAULT_POPULATION,
+          settings: StudySettings | None = None) -> tuple[Population, StudySettings]:
+    """The population and settings with the parameters ``theta`` (name -> value) in place.
+
+    Raises
+    ------
+    InvalidParameterError
+        An unknown name, or a value outside its prior's range.
+    """
+    settings = StudySettings() if settings is None else settings
+    for name, value in theta.items():
+        if name not in PARAMETERS:
+            raise InvalidParameterError(
+                f"unknown calibration parameter {name!r}; known: {', '.join(PARAMETERS)}"
+            )
+        p = PARAMETERS[name]
+        value = float(value)
+        if not (p.low - 1e-12 <= value <= p.high + 1e-12):
+            raise InvalidParameterError(
+                f"{name} must be from {p.low:g} to {p.high:g} (its prior), got {value!r}"
+            )
+        population, settings = p.put(population, settings, value)
+    return population, settings
+
+
+# ---------------------------------------------------------------- statistics
+
+
+@dataclass(frozen=True)
+class Statistic:
+    """One summary statistic: the paper's value, a scale, fitted or held out."""
+
+    name: str
+    experiment: int
+    value: float
+    scale: float
+    fitted: bool
+    what: str
+
+
+def _statistics() -> dict[str, Statistic]:
+    e1, e2 = paper.EXPERIMENT_1, paper.EXPERIMENT_2
+    out = []
+    for c, v in e1["median_eta"].items():
+        out.append(Statistic(f"median eta {c}", 1, v, v / 4, True, f"Exp 1 median eta, {c}"))
+    out.append(Statistic(
+        "NF did well", 1, e1["did_well_without_feedback"], 3.0, True,
+        "Exp 1 NF teachers reaching 90 % (of 30)",
+    ))
+    out.append(Statistic("F", 1, e1["anova"]["F"], 3.0, True, "Exp 1 repeated-measures F"))
+    for c in paper.PICKPLACE_CONDITIONS:
+        fitted = c == "NF"
+        out.append(Statistic(
+            f"mean eta {c}", 2, e2["mean_eta"][c], e2["mean_eta"][c] / 4, fitted,
+            f"Exp 2 mean eta over runs, {c}",
+        ))
+        out.append(Statistic(
+            f"third-run eta {c}", 2, e2["third_run_eta"][c], e2["third_run_eta"][c] / 4,
+            fitted, f"Exp 2 mean eta of the third run, {c}",
+        ))
+        for kind, scale in (("errors", 3.0), ("undemonstrated", 150.0), ("ambiguous", 15.0)):
+            out.append(Statistic(
+                f"{kind} {c}", 2, e2["failures"][kind][c], scale, fitted,
+                f"Exp 2 {kind} (27 runs), {c}",
+            ))
+    return {s.name: s for s in out}
+
+
+#: the summary statistics (name -> Statistic), fitted and held out
+STATISTICS: dict[str, Statistic] = _statistics()
+
+
+def summary_statistics(exp1: pd.DataFrame | None, exp2: pd.DataFrame | None) -> dict:
+    """The statistics a cohort's ``runs`` give (Experiment 1's and/or Experiment 2's).
+
+    Counts are scaled to the paper's groups (30 teachers in Experiment 1, 9 teachers x
+    3 runs per condition in Experiment 2), so a smaller simulated cohort is comparable.
+    """
+    out = {}
+    if exp1 is not None:
+        from .stats import experiment1_stats
+
+        grouped = exp1.groupby("condition")["eta"]
+        for c, v in grouped.median().items():
+            out[f"median eta {c}"] = float(v)
+        nf = exp1[exp1.condition == "NF"]
+        out["NF did well"] = float(nf.reached_target.mean() * paper.MAZE_N_TEACHERS)
+        try:
+            out["F"] = float(experiment1_stats(exp1)["anova"]["F"])
+        except Exception:  # noqa: BLE001 - a degenerate cohort (every eta equal) has no F
+            out["F"] = math.nan
+    if exp2 is not None:
+        per = paper.PICKPLACE_N_TEACHERS // len(paper.PICKPLACE_CONDITIONS) * paper.PICKPLACE_N_RUNS
+        for c, group in exp2.groupby("condition"):
+            out[f"mean eta {c}"] = float(group.eta.mean())
+            out[f"third-run eta {c}"] = float(group[group.run == group.run.max()].eta.mean())
+            for kind in ("errors", "undemonstrated", "ambiguous"):
+                out[f"{kind} {c}"] = float(group[kind].sum() * per / len(group))
+    return out
+
+
+def distance(stats: dict, names=None) -> float:
+    """The scaled Euclidean distance of ``stats`` to the paper's values, over ``names``
+    (default: the fitted statistics); a missing or NaN statistic counts as 4 scales off."""
+    names = [n for n, s in STATISTICS.items() if s.fitted] if names is None else names
+    total = 0.0
+    for n in names:
+        s, v = STATISTICS[n], stats.get(n, math.nan)
+        z = 4.0 if v is None or not math.isfinite(v) else (v - s.value) / s.scale
+        total += z * z
+    return math.sqrt(total)
+
+
+# ---------------------------------------------------------------- the simulator
+
+
+@dataclass(frozen=True)
+class Budget:
+    """How much a calibration simulates.
+
+    Attributes
+    ----------
+    population_size : int
+        Particles per ABC-SMC generation.
+    generations : int
+        ABC-SMC generations (tolerances).
+    n1, n2 : int
+        Teachers in each simulated Experiment 1 cohort, and Experiment 2 NF teachers
+        (the fit); the predictive check simulates the paper's sizes unless ``quick``.
+    draws : int
+        Posterior draws of the predictive check.
+    quick : bool
+        The test switch: smaller cohorts in the predictive check too; not a result.
+    """
+
+    population_size: int = 60
+    generations: int = 5
+    n1: int = 30
+    n2: int = 9
+    draws: int = 20
+    quick: bool = False
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+#: the test switch's budget: a check that everything runs and is written, not a result
+QUICK_BUDGET = Budget(population_size=6, generations=2, n1=3, n2=2, draws=3, quick=True)
+#: the budget of the bundled calibration
+FULL_BUDGET = Budget()
+
+
+def simulate(theta: dict, seed: int, n1: int, n2: int, engine: Engine,
+             experiment2_conditions=("NF",)) -> dict:
+    """The summary statistics of one simulated study at ``theta``.
+
+    Experiment 1 with ``n1`` teachers and Experiment 2 with ``n2`` teachers in each of
+    ``experiment2_conditions`` (the fit uses NF alone; the predictive check all four).
+    """
+    population, settings = apply(theta)
+    exp1 = run_experiment(1, seed=seed, n=n1, population=population, settings=settings,
+                          progress=False, engine=engine).runs
+    conditions = tuple(experiment2_conditions)
+    exp2 = run_experiment(2, seed=seed, n=n2 * len(conditions), population=population,
+                          settings=settings, conditions=conditions, progress=False,
+                          engine=engine).runs
+    return summary_statistics(exp1, exp2)
+
+
+# ---------------------------------------------------------------- ABC-SMC
+
+
+@dataclass
+class Calibration:
+    """What :func:`calibrate` found.
+
+    Attributes
+    ----------
+    particles : DataFrame
+        The last generation's parameter sets (one column per parameter) and ``weight``.
+    generations : DataFrame
+        Per generation: ``epsilon`` (the tolerance), ``particles``, ``simulations``.
+    budget : Budget
+    seconds : float
+        Wall time of the ABC-SMC.
+    seed : int
+    where : str
+        The executor it ran on.
+    """
+
+    particles: pd.DataFrame
+    generations: pd.DataFrame
+    budget: Budget
+    seconds: float
+    seed: int
+    where: str = ""
+
+    def point(self) -> dict:
+        """The posterior's weighted median of each parameter (the bundled population)."""
+        w = self.particles["weight"].to_numpy()
+        out = {}
+        for name in PARAMETERS:
+            v = self.particles[name].to_numpy()
+            order = np.argsort(v)
+            cum = np.cumsum(w[order]) / w.sum()
+            out[name] = float(v[order][np.searchsorted(cum, 0.5)])
+        return out
+
+    def draw(self, k: int, rng) -> list[dict]:
+        """``k`` parameter sets drawn from the posterior (by weight, with replacement)."""
+        w = self.particles["weight"].to_numpy()
+        rows = rng.choice(len(w), size=k, p=w / w.sum())
+        return [{n: float(self.particles[n].iloc[r]) for n in PARAMETERS} for r in rows]
+
+
+def _check_budget(budget) -> Budget:
+    if not isinstance(budget, Budget):
+        raise InvalidParameterError(f"budget must be a Budget, got {budget!r}")
+    lows = {"population_size": 2, "generations": 1, "n1": 3, "n2": 2, "draws": 2}
+    for name, low in lows.items():
+        v = getattr(budget, name)
+        if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= 10_000:
+            raise InvalidParameterError(
+                f"the budget's {name} must be a whole number from {low} to 10000, got {v!r}"
+            )
+    return budget
+
+
+def calibrate(budget: Budget = FULL_BUDGET, seed: int = 0, workers=None, scheduler=None,
+              folder=None, progress: bool = True) -> Calibration:
+    """Fit :data:`PARAMETERS` to the fitted :data:`STATISTICS` by ABC-SMC.
+
+    Every simulation gets its own seed from ``seed`` and a running count, so a
+    calibration reruns to the same posterior on any executor. pyabc keeps its history in
+    an SQLite file in ``folder`` (a temporary folder by default); the result is read
+    back as numbers only.
+    """
+    import tempfile
+
+    import pyabc
+
+    budget = _check_budget(budget)
+    names = list(PARAMETERS)
+    prior = pyabc.Distribution(**{
+        n: pyabc.RV("uniform", 0.0, 1.0) for n in names  # on the unit scale of each prior
+    })
+    counter = iter(range(10**9))
+    observed = {n: s.value for n, s in STATISTICS.items() if s.fitted}
+
+    with Engine(workers, scheduler) as engine:
+        def model(par):
+            theta = {n: PARAMETERS[n].from_unit(min(max(float(par[n]), 0.0), 1.0))
+                     for n in names}
+            run_seed = seed * 100_000 + next(counter)
+            stats = simulate(theta, run_seed % (2**31), budget.n1, budget.n2, engine)
+            return {n: stats.get(n, math.nan) for n in observed}
+
+        def dist(x, x0):
+            return distance(x, list(observed))
+
+        # pyabc draws its particles with numpy's global generator
+        np.random.seed(seed)  # noqa: NPY002
+        abc = pyabc.ABCSMC(
+            model, prior, dist, population_size=budget.population_size,
+            sampler=pyabc.sampler.SingleCoreSampler(check_max_eval=False),
+        )
+        with tempfile.TemporaryDirectory() as tmp:
+            where_db = Path(folder or tmp)
+            where_db.mkdir(parents=True, exist_ok=True)
+            db = where_db / "calibration_history.db"
+            db.unlink(missing_ok=True)
+            started = time.perf_counter()
+            abc.new(f"sqlite:///{db}", observed)
+            history = abc.run(max_nr_populations=budget.generations)
+            seconds = time.perf_counter() - started
+            frame, weights = history.get_distribution()
+            pops = history.get_all_populations()
+        where = engine.where
+    particles = pd.DataFrame({
+        n: [PARAMETERS[n].from_unit(min(max(float(u), 0.0), 1.0)) for u in frame[n]]
+        for n in names
+    })
+    particles["weight"] = np.asarray(weights, dtype=float)
+    gens = pops[pops.t >= 0][["t", "epsilon", "particles", "samples"]].rename(
+        columns={"t": "generation", "samples": "simulations"}
+    ).reset_index(drop=True)
+    return Calibration(particles, gens, budget, seconds, int(seed), where)
+
+
+# ---------------------------------------------------------------- validation
+
+
+def predictive(calibration: Calibration, seed: int = 1, workers=None,
+               scheduler=None) -> pd.DataFrame:
+    """Posterior predictive statistics: one row per posterior draw, every statistic.
+
+    Each draw simulates Experiment 1 and all four conditions of Experiment 2 at the
+    paper's sizes (the quick budget's small ones when ``budget.quick``), with fresh
+    seeds (``seed`` x 1000 + draw, never used by the fit).
+    """
+    budget = calibration.budget
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 7]))
+    thetas = calibration.draw(budget.draws, rng)
+    n1 = budget.n1 if budget.quick else paper.MAZE_N_TEACHERS
+    n2 = budget.n2 if budget.quick else paper.PICKPLACE_N_TEACHERS // 4
+    rows = []
+    with Engine(workers, scheduler) as engine:
+        for k, theta in enumerate(thetas):
+            stats = simulate(theta, 10**6 + seed * 1000 + k, n1, n2, engine,
+                             experiment2_conditions=paper.PICKPLACE_CONDITIONS)
+            rows.append({"draw": k, **theta, **stats})
+    return pd.DataFrame(rows)
+
+
+def report(calibration: Calibration, predicted: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
+    """Each statistic's paper value, posterior predictive median and ``level`` interval,
+    and whether the paper's value lies inside (one row per statistic)."""
+    lo_q, hi_q = (1 - level) / 2, 1 - (1 - level) / 2
+    rows = []
+    for name, s in STATISTICS.items():
+        values = predicted[name].dropna() if name in predicted else pd.Series(dtype=float)
+        if values.empty:
+            low = high = median = math.nan
+        else:
+            low, median, high = (float(values.quantile(q)) for q in (lo_q, 0.5, hi_q))
+        rows.append({
+            "statistic": name, "fitted": s.fitted, "paper": s.value, "median": median,
+            "low": low, "high": high, "inside": bool(low <= s.value <= high),
+        })
+    return pd.DataFrame(rows)
+
+
+def format_report(calibration: Calibration, table: pd.DataFrame) -> str:
+    """The calibration report in plain text."""
+    b = calibration.budget
+    held = table[~table.fitted]
+    lines = [
+        "Calibration of the simulated teachers and the maze (ABC-SMC, pyabc)",
+        f"budget: {b.population_size} particles x {b.generations} generations, Exp 1 "
+        f"cohorts of {b.n1}, Exp 2 NF groups of {b.n2}; {b.draws} posterior draws"
+        + (" (quick: not a result)" if b.quick else ""),
+        f"simulated studies: {int(calibration.generations.simulations.sum())}, "
+        f"{calibration.seconds:.0f} s on {calibration.where}",
+        "tolerance per generation: "
+        + ", ".join(f"{e:.2f}" for e in calibration.generations.epsilon),
+        "",
+        "posterior (weighted median; 5 % .. 95 %):",
+    ]
+    w = calibration.particles.weight.to_numpy()
+    point = calibration.point()
+    for name, p in PARAMETERS.items():
+        v = calibration.particles[name].to_numpy()
+        order = np.argsort(v)
+        cum = np.cumsum(w[order]) / w.sum()
+        lo, hi = v[order][np.searchsorted(cum, 0.05)], v[order][min(np.searchsorted(cum, 0.95),
+                                                                    len(v) - 1)]
+        lines.append(f"  {name}: {point[name]:.4g} ({lo:.4g} .. {hi:.4g}); prior "
+                     f"{'log-' if p.log else ''}uniform {p.low:g} .. {p.high:g}")
+    lines += ["", "statistic: paper, predictive median [90 % interval], inside?"]
+    for fitted, title in ((True, "fitted"), (False, "held out")):
+        lines.append(f"  {title}:")
+        for r in table[table.fitted == fitted].itertuples():
+            lines.append(f"    {r.statistic}: {r.paper:.4g}, {r.median:.4g} "
+                         f"[{r.low:.4g}, {r.high:.4g}] {'yes' if r.inside else 'NO'}")
+    share = held.inside.mean() if len(held) else math.nan
+    lines += ["", f"held-out statistics inside their 90 % interval: {int(held.inside.sum())} "
+                  f"of {len(held)} ({share:.0%}; target at least 80 %)"]
+    return "\n".join(lines)
+
+
+def save(calibration: Calibration, predicted: pd.DataFrame, table: pd.DataFrame, out) -> dict:
+    """Write the posterior, the predictive draws, the report and the point estimate."""
+    from .report import check_out_dir
+
+    out = check_out_dir(out)
+    paths = {
+        "posterior": out / "calibration_posterior.csv",
+        "generations": out / "calibration_generations.csv",
+        "predictive": out / "calibration_predictive.csv",
+        "report": out / "calibration_report.txt",
+        "summary": out / "calibration_summary.json",
+    }
+    atomic_write_text(paths["posterior"], calibration.particles.to_csv(index=False))
+    atomic_write_text(paths["generations"], calibration.generations.to_csv(index=False))
+    atomic_write_text(paths["predictive"], predicted.to_csv(index=False))
+    atomic_write_text(paths["report"], format_report(calibration, table) + "\n")
+    summary = {
+        "point": calibration.point(),
+        "budget": calibration.budget.to_dict(),
+        "seed": calibration.seed,
+        "seconds": calibration.seconds,
+        "where": calibration.where,
+        "simulations": int(calibration.generations.simulations.sum()),
+        "statistics": table.to_dict(orient="records"),
+        "held_out_inside": float(table[~table.fitted].inside.mean()),
+    }
+    atomic_write_text(paths["summary"], json.dumps(summary, indent=2, default=float) + "\n")
+    return paths
