@@ -17,40 +17,59 @@ from tutor.tasks.maze import MazeTask, load_layout
 from tutor.teachers.traits import DEFAULT_POPULATION
 
 
-def test_the_bundled_reach_gives_the_bundled_maze_back():
+def test_the_bundled_blocks_give_the_bundled_maze_back():
     layout = load_layout()
-    same = layout.with_obstacle_reach(layout.obstacle_reach)
+    assert layout.blocks == pytest.approx({"reach": 0.13, "low": 0.10, "height": 0.03,
+                                           "gap": 0.05})
+    same = layout.with_blocks(**layout.blocks)
     assert same.obstacles == layout.obstacles
     np.testing.assert_allclose(same.guide_points, layout.guide_points, atol=1e-12)
+    assert layout.with_blocks().obstacles == layout.obstacles  # None: as now
 
 
-def test_a_longer_reach_narrows_both_gaps_and_the_paths_still_pass():
-    task = MazeTask(load_layout().with_obstacle_reach(0.15))
-    left, right = task.layout.obstacles
-    assert left.x1 == pytest.approx(0.15) and right.x0 == pytest.approx(0.05)
-    assert task.layout.obstacle_reach == pytest.approx(0.15)
+def test_new_blocks_move_both_blocks_and_a_careful_hand_still_passes():
+    task = MazeTask(load_layout().with_blocks(reach=0.16, low=0.08, height=0.06, gap=0.03))
+    one, two = task.layout.obstacles
+    assert (one.x0, one.x1, one.y0, one.y1) == pytest.approx((0.0, 0.16, 0.08, 0.14))
+    assert (two.x0, two.x1, two.y0, two.y1) == pytest.approx((0.04, 0.20, 0.17, 0.23))
+    assert task.layout.blocks["gap"] == pytest.approx(0.03)
     rng = np.random.default_rng(0)
-    for i in (0, 69, 139):  # a careful hand still passes through both gaps
+    for i in (0, 69, 139):  # the scripted hand goes through both gaps
         demo = task.preprocess(task.scripted_demo(i, rng))
         assert task.judge_demo(demo, task.test_points[i]).passed[0]
 
 
-@pytest.mark.parametrize("reach", [0.0, 0.195, -0.1, float("nan"), "0.12", True])
-def test_an_impossible_reach_is_named(reach):
-    with pytest.raises(InvalidParameterError, match="reach"):
-        load_layout().with_obstacle_reach(reach)
+@pytest.mark.parametrize(
+    "blocks, match",
+    [({"reach": 0.195}, "side gap"), ({"reach": -0.1}, "reach"),
+     ({"height": 0.005}, "high"), ({"gap": 0.01}, "between"), ({"low": 0.065}, "start zone"),
+     ({"low": 0.12, "height": 0.06, "gap": 0.07}, "target"),
+     ({"reach": float("nan")}, "reach"), ({"low": "0.1"}, "low"), ({"gap": True}, "gap")],
+)
+def test_a_maze_no_hand_can_pass_is_named(blocks, match):
+    with pytest.raises(InvalidParameterError, match=match):
+        load_layout().with_blocks(**blocks)
 
 
-def test_the_study_settings_build_the_maze_with_the_reach():
-    task = cohort_task("maze", StudySettings(maze_reach=0.145))
-    assert task.layout.obstacle_reach == pytest.approx(0.145)
-    assert cohort_task("maze", StudySettings()).layout.obstacle_reach == pytest.approx(0.13)
+def test_the_study_settings_build_the_maze_with_the_blocks():
+    task = cohort_task("maze", StudySettings(maze_blocks=(0.145, None, None, None)))
+    assert task.layout.blocks["reach"] == pytest.approx(0.145)
+    assert task.layout.blocks["low"] == pytest.approx(0.10)
+    assert cohort_task("maze", StudySettings()).layout.blocks["reach"] == pytest.approx(0.13)
+
+
+def test_an_impossible_geometry_simulates_nothing_and_is_far_away():
+    theta = {"maze_low": 0.12, "maze_height": 0.06, "maze_gap": 0.07}
+    assert calibration.simulate(theta, 0, 3, 2, engine=None) == {}
+    assert calibration.distance({}) == pytest.approx(4 * math.sqrt(10))
 
 
 def test_every_parameter_lands_where_it_says():
     theta = {name: p.from_unit(0.25) for name, p in calibration.PARAMETERS.items()}
     population, settings = calibration.apply(theta)
-    assert settings.maze_reach == pytest.approx(theta["maze_reach"])
+    assert settings.maze_blocks == pytest.approx(tuple(
+        theta[f"maze_{k}"] for k in ("reach", "low", "height", "gap")
+    ))
     assert population.enough_median_maze == pytest.approx(theta["enough_median_maze"])
     assert population.satisfaction_low == pytest.approx(theta["satisfaction_low"])
     mean_repeat = population.repeat_a / (population.repeat_a + population.repeat_b)

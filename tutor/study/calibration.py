@@ -65,6 +65,7 @@ from .. import paper
 from ..engine import Engine
 from ..errors import InvalidParameterError
 from ..fileio import atomic_write_text
+from ..tasks.maze import load_layout
 from ..teachers.traits import DEFAULT_POPULATION, Population
 from .cohort import StudySettings, run_experiment
 
@@ -128,8 +129,13 @@ def _field(name: str):
     return put
 
 
-def _reach(population, settings, value):
-    return population, dataclasses.replace(settings, maze_reach=float(value))
+def _block(index: int):
+    def put(population, settings, value):
+        blocks = list(settings.maze_blocks or (None,) * 4)
+        blocks[index] = float(value)
+        return population, dataclasses.replace(settings, maze_blocks=tuple(blocks))
+
+    return put
 
 
 def _satisfaction(population, settings, value):
@@ -157,10 +163,28 @@ PARAMETERS: dict[str, Parameter] = {
     for p in (
         Parameter(
             "maze_reach", 0.10, 0.16,
-            "how far each maze block juts in (m): the bundled 13 cm in the middle; at "
-            "10 cm the gaps are as wide as the blocks, at 16 cm a 4 cm gap is left (a hand "
-            "can still pass it in one stroke)",
-            _reach,
+            "how far each maze block juts in (m): at 10 cm the side gaps are as wide as "
+            "the blocks, at 16 cm a 4 cm gap is left (a hand still passes it in one "
+            "stroke); the bundled 13 cm in the middle",
+            _block(0),
+        ),
+        Parameter(
+            "maze_low", 0.075, 0.12,
+            "where block 1 starts (m, its lower edge): from 1.5 cm above the start zone "
+            "(the paths must turn at once) to 12 cm",
+            _block(1),
+        ),
+        Parameter(
+            "maze_height", 0.02, 0.06,
+            "each block's height (m): from a thin wall to a block as high as the start zone",
+            _block(2),
+        ),
+        Parameter(
+            "maze_gap", 0.025, 0.07,
+            "the gap between block 1's top and block 2's bottom (m); geometries that "
+            "leave block 2 within 3 cm of the target are impossible (the largest "
+            "distance, see :func:`simulate`)",
+            _block(3),
         ),
         Parameter(
             "enough_median_maze", 2.0, 9.0,
@@ -377,8 +401,15 @@ def simulate(theta: dict, seed: int, n1: int, n2: int, engine: Engine,
 
     Experiment 1 with ``n1`` teachers and Experiment 2 with ``n2`` teachers in each of
     ``experiment2_conditions`` (the fit uses NF alone; the predictive check all four).
+    A maze geometry no hand can pass (:meth:`~tutor.tasks.maze.MazeLayout.with_blocks`
+    refuses it) gives no statistics: :func:`distance` then counts each as 4 scales off.
     """
     population, settings = apply(theta)
+    if settings.maze_blocks is not None:
+        try:  # a geometry no hand can pass: nothing to simulate
+            load_layout().with_blocks(*settings.maze_blocks)
+        except InvalidParameterError:
+            return {}
     exp1 = run_experiment(1, seed=seed, n=n1, population=population, settings=settings,
                           progress=False, engine=engine).runs
     conditions = tuple(experiment2_conditions)

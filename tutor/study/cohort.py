@@ -119,16 +119,16 @@ class StudySettings:
         release only. Measured with the paper's cohort at seed 0: the same numbers
         either way (no realisation failed only because of the arm), 17 s on against
         12 s off.
-    maze_reach : float or None
-        How far the maze's two blocks jut in from their walls (m,
-        :meth:`~tutor.tasks.maze.MazeLayout.with_obstacle_reach`); None: the bundled
-        layout's. The calibration (:mod:`tutor.study.calibration`) varies it.
+    maze_blocks : tuple of 4 (float or None), or None
+        The maze's two wall blocks (m): reach, low, height and gap of
+        :meth:`~tutor.tasks.maze.MazeLayout.with_blocks` (None: the bundled layout's).
+        The calibration (:mod:`tutor.study.calibration`) varies them.
     """
 
     target: float = 0.9
     pickplace_ambiguity: float = 0.03
     pickplace_feasibility: bool = True
-    maze_reach: float | None = None
+    maze_blocks: tuple | None = None
 
     def ambiguity(self, name: str) -> float | None:
         """delta_a for task ``name``'s runs: pick-and-place's setting, else None (the
@@ -137,10 +137,10 @@ class StudySettings:
 
     def task_options(self, name: str) -> dict:
         """The options a cohort builds task ``name`` with (:func:`tutor.tasks.make_task`)."""
-        if name == "maze" and self.maze_reach is not None:
+        if name == "maze" and self.maze_blocks is not None:
             from ..tasks.maze import load_layout
 
-            return {"layout": load_layout().with_obstacle_reach(self.maze_reach)}
+            return {"layout": load_layout().with_blocks(*self.maze_blocks)}
         feasibility = "map" if self.pickplace_feasibility else None
         return {"pickplace": {"feasibility": feasibility}}.get(name, {})
 
@@ -223,7 +223,7 @@ _TASKS: dict = {}
 
 
 def cohort_task(name: str, settings: StudySettings):
-    key = (name, settings.pickplace_feasibility, settings.maze_reach)
+    key = (name, settings.pickplace_feasibility, settings.maze_blocks)
     if key not in _TASKS:
         _TASKS[key] = make_task(name, **settings.task_options(name))
     return _TASKS[key]

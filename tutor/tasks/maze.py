@@ -135,46 +135,85 @@ class MazeLayout:
         eye = np.broadcast_to(np.eye(2), (B, P, 2, 2)).copy()
         return FrameBatch(eye, eye.copy(), b)
 
-    def with_obstacle_reach(self, reach: float) -> MazeLayout:
-        """This maze with both blocks jutting ``reach`` (m) in from their walls.
+    #: the blocks' free sizes and places, in the order of :meth:`with_blocks`
+    BLOCK_NAMES = ("reach", "low", "height", "gap")
+
+    @property
+    def blocks(self) -> dict[str, float]:
+        """The two wall blocks' free geometry (m): how far each juts in from its wall
+        (``reach``), block 1's lower edge (``low``), each block's ``height`` and the
+        ``gap`` between block 1's top and block 2's bottom."""
+        one, two = self.obstacles
+        return {
+            "reach": float(one.x1 - one.x0),
+            "low": float(one.y0),
+            "height": float(one.y1 - one.y0),
+            "gap": float(two.y0 - one.y1),
+        }
+
+    def with_blocks(self, reach=None, low=None, height=None, gap=None) -> MazeLayout:
+        """This maze with its two wall blocks sized and placed anew (None: as now).
 
         The paper gives X, I and the target but not the two blocks' sizes or places; the
-        calibration (:mod:`tutor.study.calibration`) chooses how far they jut in. Block 1
-        keeps its left wall and block 2 its right one, both keep their heights, and the
-        guide points stay in the middle of the gaps at their distances from the blocks,
-        so ``with_obstacle_reach`` of the bundled reach gives the bundled layout back.
+        calibration (:mod:`tutor.study.calibration`) chooses them. Block 1 keeps its
+        left wall and block 2 its right one; both jut ``reach`` in and are ``height``
+        high, block 1 from ``low`` up, block 2 ``gap`` above it. The guide points stay
+        in the middle of the gaps at their distances from the blocks (1.5 cm below block
+        1 and above block 2; 2 cm, or 0.4 of a narrower gap, between them), so the
+        bundled values give the bundled layout back.
 
         Raises
         ------
         InvalidParameterError
-            Not two wall blocks, or ``reach`` not a number leaving a gap of at least
-            1 cm on the other side.
+            Not the paper's two wall blocks, a value that is not a finite number, or a
+            maze no hand can pass: a side gap under 1 cm, a block under 1 cm high, a
+            gap between blocks under 2 cm, block 1 within 1.5 cm of the start zone or
+            block 2 within 3 cm of the target.
         """
-        width = self.workspace.x1 - self.workspace.x0
-        reach = check_number(reach, "the obstacles' reach (m)")
         if len(self.obstacles) != 2 or len(self.guide_points) != 4:
             raise InvalidParameterError(
-                "with_obstacle_reach needs the two wall blocks and four guide points of the "
+                "with_blocks needs the two wall blocks and four guide points of the "
                 "paper's maze"
             )
-        if not 0.01 <= reach <= width - 0.01:
-            raise InvalidParameterError(
-                f"the obstacles' reach must leave a gap of at least 1 cm: from 0.01 to "
-                f"{width - 0.01:.2f} m, got {reach!r}"
-            )
-        left, right = self.obstacles
+        now = self.blocks
+        given = dict(zip(self.BLOCK_NAMES, (reach, low, height, gap), strict=True))
+        b = {
+            k: now[k] if v is None else check_number(v, f"the blocks' {k} (m)")
+            for k, v in given.items()
+        }
         x0, x1 = self.workspace.x0, self.workspace.x1
-        new_left = dataclasses.replace(left, x0=x0, x1=x0 + reach)
-        new_right = dataclasses.replace(right, x0=x1 - reach, x1=x1)
-        guides = np.array(self.guide_points, dtype=float)
-        guides[:2, 0] = (x0 + reach + x1) / 2  # the gap right of block 1
-        guides[2:, 0] = (x0 + x1 - reach) / 2  # the gap left of block 2
-        return dataclasses.replace(self, obstacles=(new_left, new_right), guide_points=guides)
-
-    @property
-    def obstacle_reach(self) -> float:
-        """How far block 1 juts in from the left wall (m)."""
-        return float(self.obstacles[0].x1 - self.obstacles[0].x0)
+        top = b["low"] + 2 * b["height"] + b["gap"]
+        target_low = self.target_center[1] - self.target_radius
+        problems = [
+            (0.01 <= b["reach"] <= (x1 - x0) - 0.01, "the reach must leave a side gap of 1 cm"),
+            (b["height"] >= 0.01, "each block must be at least 1 cm high"),
+            (b["gap"] >= 0.02, "the gap between the blocks must be at least 2 cm"),
+            (b["low"] >= self.start_zone.y1 + 0.015,
+             "block 1 must start at least 1.5 cm above the start zone"),
+            (top <= target_low - 0.03, "block 2 must end at least 3 cm below the target"),
+        ]
+        for ok, why in problems:
+            if not ok:
+                raise InvalidParameterError(
+                    f"no hand can pass this maze: {why} (reach {b['reach']:.3g}, low "
+                    f"{b['low']:.3g}, height {b['height']:.3g}, gap {b['gap']:.3g} m)"
+                )
+        one, two = self.obstacles
+        y2 = b["low"] + b["height"] + b["gap"]
+        one = dataclasses.replace(
+            one, x0=x0, x1=x0 + b["reach"], y0=b["low"], y1=b["low"] + b["height"]
+        )
+        two = dataclasses.replace(two, x0=x1 - b["reach"], x1=x1, y0=y2, y1=y2 + b["height"])
+        between = min(0.02, 0.4 * b["gap"])  # 2 cm off each block, less in a narrow gap
+        guides = np.array(
+            [
+                [(x0 + b["reach"] + x1) / 2, one.y0 - 0.015],  # the gap right of block 1
+                [(x0 + b["reach"] + x1) / 2, one.y1 + between],
+                [(x0 + x1 - b["reach"]) / 2, two.y0 - between],  # the gap left of block 2
+                [(x0 + x1 - b["reach"]) / 2, two.y1 + 0.015],
+            ]
+        )
+        return dataclasses.replace(self, obstacles=(one, two), guide_points=guides)
 
     def reference_path(self, start, rng=None, jitter: float = 0.0, n_samples=None) -> np.ndarray:
         """A smooth scripted demonstration from ``start`` through the gaps to the target.
