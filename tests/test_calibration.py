@@ -58,18 +58,24 @@ def test_the_study_settings_build_the_maze_with_the_blocks():
     assert cohort_task("maze", StudySettings()).layout.blocks["reach"] == pytest.approx(0.13)
 
 
-def test_an_impossible_geometry_simulates_nothing_and_is_far_away():
-    theta = {"maze_low": 0.12, "maze_height": 0.06, "maze_gap": 0.07}
-    assert calibration.simulate(theta, 0, 3, 2, engine=None) == {}
+@pytest.mark.parametrize("corner", range(8))
+def test_every_corner_of_the_geometry_prior_is_a_maze_a_hand_passes(corner):
+    names = ("maze_low", "maze_height", "maze_gap_share")
+    theta = {n: (calibration.PARAMETERS[n].low, calibration.PARAMETERS[n].high)[(corner >> i) & 1]
+             for i, n in enumerate(names)}
+    _, settings = calibration.apply(theta)
+    layout = load_layout().with_blocks(*settings.maze_blocks)  # refused if no hand passes
+    assert layout.blocks["gap"] >= calibration.NARROWEST_GAP - 1e-12
     assert calibration.distance({}) == pytest.approx(4 * math.sqrt(10))
 
 
 def test_every_parameter_lands_where_it_says():
     theta = {name: p.from_unit(0.25) for name, p in calibration.PARAMETERS.items()}
     population, settings = calibration.apply(theta)
-    assert settings.maze_blocks == pytest.approx(tuple(
-        theta[f"maze_{k}"] for k in ("reach", "low", "height", "gap")
+    assert settings.maze_blocks[:3] == pytest.approx(tuple(
+        theta[f"maze_{k}"] for k in ("reach", "low", "height")
     ))
+    assert settings.maze_blocks[3] >= calibration.NARROWEST_GAP
     assert population.enough_median_maze == pytest.approx(theta["enough_median_maze"])
     assert population.satisfaction_low == pytest.approx(theta["satisfaction_low"])
     mean_repeat = population.repeat_a / (population.repeat_a + population.repeat_b)

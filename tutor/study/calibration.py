@@ -138,6 +138,22 @@ def _block(index: int):
     return put
 
 
+#: the narrowest gap between the blocks the calibration draws (m)
+NARROWEST_GAP = 0.025
+
+
+def _gap_share(population, settings, value):
+    layout = load_layout()
+    now = list(settings.maze_blocks or (None,) * 4)
+    known = layout.blocks
+    low = known["low"] if now[1] is None else now[1]
+    height = known["height"] if now[2] is None else now[2]
+    highest = layout.target_center[1] - layout.target_radius - 0.03 - 1e-9  # block 2's top
+    room = max(0.0, highest - low - 2 * height - NARROWEST_GAP)
+    now[3] = NARROWEST_GAP + float(value) * room
+    return population, dataclasses.replace(settings, maze_blocks=tuple(now))
+
+
 def _satisfaction(population, settings, value):
     return dataclasses.replace(population, satisfaction_low=float(value)), settings
 
@@ -175,16 +191,17 @@ PARAMETERS: dict[str, Parameter] = {
             _block(1),
         ),
         Parameter(
-            "maze_height", 0.02, 0.06,
-            "each block's height (m): from a thin wall to a block as high as the start zone",
+            "maze_height", 0.02, 0.045,
+            "each block's height (m): from a thin wall to 4.5 cm (higher ones would leave "
+            "no room for a gap at the highest start)",
             _block(2),
         ),
         Parameter(
-            "maze_gap", 0.025, 0.07,
-            "the gap between block 1's top and block 2's bottom (m); geometries that "
-            "leave block 2 within 3 cm of the target are impossible (the largest "
-            "distance, see :func:`simulate`)",
-            _block(3),
+            "maze_gap_share", 0.0, 1.0,
+            "the gap between block 1's top and block 2's bottom, as a share of the room "
+            "there is: 0 is the narrowest a hand passes (2.5 cm), 1 puts block 2 3 cm "
+            "below the target; so every draw is a maze a hand can pass",
+            _gap_share,
         ),
         Parameter(
             "enough_median_maze", 2.0, 9.0,
@@ -401,15 +418,8 @@ def simulate(theta: dict, seed: int, n1: int, n2: int, engine: Engine,
 
     Experiment 1 with ``n1`` teachers and Experiment 2 with ``n2`` teachers in each of
     ``experiment2_conditions`` (the fit uses NF alone; the predictive check all four).
-    A maze geometry no hand can pass (:meth:`~tutor.tasks.maze.MazeLayout.with_blocks`
-    refuses it) gives no statistics: :func:`distance` then counts each as 4 scales off.
     """
     population, settings = apply(theta)
-    if settings.maze_blocks is not None:
-        try:  # a geometry no hand can pass: nothing to simulate
-            load_layout().with_blocks(*settings.maze_blocks)
-        except InvalidParameterError:
-            return {}
     exp1 = run_experiment(1, seed=seed, n=n1, population=population, settings=settings,
                           progress=False, engine=engine).runs
     conditions = tuple(experiment2_conditions)
