@@ -4,7 +4,8 @@ Each demo is a scripted stroke through the maze's gaps (MazeLayout.reference_pat
 recorded as a person's mouse stroke would be: 80 Hz samples over 2-3.5 s, with a
 little smoothed hand tremor that fades out at both ends. The sets illustrate the
 paper's teaching failures; tests/test_demo_sets.py checks that each one raises
-the failure it is named after.
+the failure it is named after. The novice set is a typical simulated teacher's NF run
+(the median eta of 60), a set of the kind a novice gives.
 
 Run:  .venv/bin/python scripts/make_maze_demo_sets.py
 """
@@ -17,7 +18,10 @@ from pathlib import Path
 import numpy as np
 
 from tutor.demofiles import save_demos
+from tutor.framework.wording import percent
 from tutor.tasks.maze import load_layout
+from tutor.teachers.maze import MazeTeacher
+from tutor.teachers.traits import DEFAULT_POPULATION
 
 OUT = Path(__file__).resolve().parents[1] / "tutor" / "assets" / "demos"
 RATE_HZ = 80.0
@@ -79,6 +83,45 @@ SETS = {
 }
 
 
+#: how many simulated novices the typical one is chosen from
+NOVICES = 60
+
+
+class _Recorded(MazeTeacher):
+    """A simulated teacher that keeps each stroke it draws (the demos, as recorded)."""
+
+    def stroke(self, start, rng, slip=False):
+        drawn = super().stroke(start, rng, slip)
+        self.strokes.append(drawn)
+        return drawn
+
+
+def novice_set():
+    """The demos of a typical simulated novice without feedback (NF).
+
+    ``NOVICES`` teachers drawn from the bundled (calibrated) population each teach the
+    maze under NF; the one whose eta (Experiment 1's rule) is the median of theirs is
+    kept, so the set scores as a typical novice does, not as the optimum."""
+    etas, runs = [], []
+    for k in range(NOVICES):
+        rng = np.random.default_rng([k, 4])
+        teacher = _Recorded(DEFAULT_POPULATION.sample(rng))
+        teacher.strokes = []
+        run = teacher.teach("NF", rng)
+        etas.append(run.score().efficiency)
+        runs.append((run, teacher.strokes))
+    median = float(np.median(etas))
+    k = int(np.argmin(np.abs(np.asarray(etas) - median)))
+    run, strokes = runs[k]
+    description = (
+        f"A typical novice without feedback: the simulated NF teacher (of {NOVICES} drawn "
+        f"from the bundled population) whose eta is the median of theirs, "
+        f"{percent(etas[k])} with {run.n_demos} demos; they chose their starts by their own "
+        "plan and stopped when their prior said the robot had had enough."
+    )
+    return strokes, description
+
+
 def main() -> None:
     layout = load_layout()
     OUT.mkdir(parents=True, exist_ok=True)
@@ -87,6 +130,9 @@ def main() -> None:
         demos = [recording(layout, s, rng, **special.get(i, {})) for i, s in enumerate(starts)]
         path = save_demos(OUT / f"maze_{name}.json", demos, task="maze", description=description)
         print(f"wrote {path} ({len(demos)} demos)")
+    demos, description = novice_set()
+    path = save_demos(OUT / "maze_novice.json", demos, task="maze", description=description)
+    print(f"wrote {path} ({len(demos)} demos): {description}")
 
 
 if __name__ == "__main__":

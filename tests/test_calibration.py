@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -150,3 +151,31 @@ def test_the_calibrate_command_runs_end_to_end_on_the_quick_budget(tmp_path, cap
     assert len(predictive) == calibration.QUICK_BUDGET.draws
     assert {"mean eta BF", "undemonstrated SF", "median eta VR"} <= set(predictive.columns)
     assert len(summary["statistics"]) == len(calibration.STATISTICS)
+
+    # what save wrote, load reads back (numbers only), and the check's figure draws it
+    found, predicted, table = calibration.load(out)
+    assert found.point() == pytest.approx(summary["point"])
+    assert found.budget == calibration.QUICK_BUDGET
+    assert len(predicted) == calibration.QUICK_BUDGET.draws
+    assert list(table.statistic) == list(calibration.STATISTICS)
+    saved = (out / "calibration_report.txt").read_text(encoding="utf-8")
+    assert calibration.format_report(found, table).strip() == saved.strip()
+    from tutor.study.figures import calibration_figure
+
+    fig = calibration_figure(table)
+    assert len(fig.axes[0].get_yticklabels()) == len(calibration.STATISTICS)
+    assert "held-out statistics" in fig.axes[0].get_title()
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+
+
+def test_a_folder_without_a_calibration_is_refused_by_name(tmp_path):
+    from tutor.errors import InvalidFileError
+
+    with pytest.raises(InvalidFileError, match="lfd-tutor calibrate --out"):
+        calibration.load(tmp_path)
+    (tmp_path / "calibration_summary.json").write_text("{not json", encoding="utf-8")
+    with pytest.raises(InvalidFileError, match="calibrate"):
+        calibration.load(tmp_path)
+

@@ -86,6 +86,7 @@ __all__ = [
     "predictive",
     "report",
     "save",
+    "load",
 ]
 
 
@@ -658,3 +659,48 @@ def save(calibration: Calibration, predicted: pd.DataFrame, table: pd.DataFrame,
     }
     atomic_write_text(paths["summary"], json.dumps(summary, indent=2, default=float) + "\n")
     return paths
+
+
+#: the bundled calibration: the files :func:`save` wrote for the bundled population and maze
+BUNDLED_FOLDER = ("calibration",)
+
+
+def load(folder=None) -> tuple[Calibration, pd.DataFrame, pd.DataFrame]:
+    """A calibration as :func:`save` wrote it: ``(calibration, predicted, table)``.
+
+    ``folder`` defaults to the bundled calibration (``tutor/assets/calibration``), the one
+    the bundled population (:data:`~tutor.teachers.traits.DEFAULT_POPULATION`) and maze
+    come from. Numbers only (CSV and JSON), never a pickle.
+
+    Raises
+    ------
+    InvalidFileError
+        A file is missing or is not what :func:`save` writes.
+    """
+    from ..errors import InvalidFileError
+    from ..resources import asset
+
+    where = Path(folder) if folder is not None else asset(*BUNDLED_FOLDER)
+    try:
+        summary = json.loads((where / "calibration_summary.json").read_text(encoding="utf-8"))
+        particles = pd.read_csv(where / "calibration_posterior.csv")
+        gens = pd.read_csv(where / "calibration_generations.csv")
+        predicted = pd.read_csv(where / "calibration_predictive.csv")
+        table = pd.DataFrame(summary["statistics"])
+        budget = Budget(**summary["budget"])
+        found = Calibration(particles, gens, budget, float(summary["seconds"]),
+                            int(summary["seed"]), str(summary.get("where", "")))
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise InvalidFileError(
+            f"{where} does not hold a calibration as `lfd-tutor calibrate --out` writes it "
+            f"({type(exc).__name__}: {exc}); rerun the command into that folder"
+        ) from None
+    missing = [n for n in (*PARAMETERS, "weight") if n not in particles]
+    if missing or not {"statistic", "fitted", "paper", "low", "high", "inside"} <= set(table):
+        raise InvalidFileError(
+            f"{where}: the calibration files lack {missing or 'report columns'}; they were "
+            "written by another version: rerun `lfd-tutor calibrate --out` into that folder"
+        )
+    table["fitted"] = table["fitted"].astype(bool)
+    table["inside"] = table["inside"].astype(bool)
+    return found, predicted, table
