@@ -1,7 +1,7 @@
 """Put a calibration's point into the bundled population and maze.
 
 ``lfd-tutor calibrate --out DIR`` writes the posterior; this script takes its point
-(each parameter's weighted posterior median, :meth:`Calibration.point`) and writes it
+(:meth:`Calibration.bundled`: the particle refine chose) and writes it
 where the tutor reads its defaults:
 
 - the maze's two blocks and guide points into ``tutor/assets/maze.json``;
@@ -46,7 +46,7 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     folder = Path(args.folder)
     found, _, _ = calibration.load(folder)
-    point = {k: round(v, 4) for k, v in found.point().items()}
+    point = {k: round(v, 4) for k, v in found.bundled().items()}
     population, settings = calibration.apply(point)
 
     # the maze: blocks (to the millimetre) and guide points of the calibrated geometry

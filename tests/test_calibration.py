@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 
@@ -152,9 +151,23 @@ def test_the_calibrate_command_runs_end_to_end_on_the_quick_budget(tmp_path, cap
     assert {"mean eta BF", "undemonstrated SF", "median eta VR"} <= set(predictive.columns)
     assert len(summary["statistics"]) == len(calibration.STATISTICS)
 
+    # refine chose the bundled point among the last generation's closest particles
+    refined = pd.read_csv(out / "calibration_refined.csv")
+    assert len(refined) == 2 and set(calibration.PARAMETERS) <= set(refined.columns)
+    best = refined.loc[refined.mean_distance.idxmin()]
+    assert summary["chosen"] == pytest.approx({n: best[n] for n in calibration.PARAMETERS})
+    assert set(refined.abc_distance) <= set(posterior.distance)
+    at_point = pd.read_csv(out / "calibration_point_predictive.csv")
+    assert len(at_point) == calibration.QUICK_BUDGET.draws
+    for name in calibration.PARAMETERS:  # every row of the point check is the chosen point
+        assert (at_point[name] == summary["chosen"][name]).all()
+    assert "the bundled point (fresh seeds)" in text and "<- bundled" in text
+
     # what save wrote, load reads back (numbers only), and the check's figure draws it
     found, predicted, table = calibration.load(out)
     assert found.point() == pytest.approx(summary["point"])
+    assert found.bundled() == pytest.approx(summary["chosen"])
+    assert table.point_median.notna().all() == table["median"].notna().all()
     assert found.budget == calibration.QUICK_BUDGET
     assert len(predicted) == calibration.QUICK_BUDGET.draws
     assert list(table.statistic) == list(calibration.STATISTICS)
@@ -178,4 +191,25 @@ def test_a_folder_without_a_calibration_is_refused_by_name(tmp_path):
     (tmp_path / "calibration_summary.json").write_text("{not json", encoding="utf-8")
     with pytest.raises(InvalidFileError, match="calibrate"):
         calibration.load(tmp_path)
+
+
+
+def test_report_checks_the_posterior_and_the_bundled_point_apart():
+    paper = {n: s.value for n, s in calibration.STATISTICS.items()}
+    around = pd.DataFrame([{n: v * f for n, v in paper.items()} for f in (0.5, 1.0, 1.5)])
+    far = pd.DataFrame([{n: v * 3 + 10 for n, v in paper.items()} for _ in range(3)])
+    table = calibration.report(None, far, point_predicted=around)
+    assert not table.inside.any() and table.point_inside.all()
+    assert table.point_median.tolist() == pytest.approx(list(paper.values()))
+    alone = calibration.report(None, around)  # no point check: its columns are empty
+    assert alone.inside.all() and alone.point_median.isna().all()
+
+
+def test_refine_needs_the_particles_distances():
+    particles = pd.DataFrame([{n: p.from_unit(0.5) for n, p in calibration.PARAMETERS.items()}])
+    particles["weight"] = 1.0
+    old = calibration.Calibration(particles, pd.DataFrame(), calibration.QUICK_BUDGET, 0.0, 0)
+    assert old.bundled() == old.point()  # nothing chosen yet: the marginal medians
+    with pytest.raises(InvalidParameterError, match="rerun lfd-tutor calibrate"):
+        calibration.refine(old)
 

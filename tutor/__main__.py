@@ -321,12 +321,18 @@ def calibrate_command(args) -> None:
     found = calibration.calibrate(
         budget, seed=args.seed, workers=args.workers, scheduler=args.scheduler, folder=out
     )
-    predicted = calibration.predictive(
-        found, seed=args.seed + 1, workers=args.workers, scheduler=args.scheduler
+    found = calibration.refine(
+        found, seed=args.seed + 2, workers=args.workers, scheduler=args.scheduler,
+        candidates=2 if args.quick else 6, seeds=2 if args.quick else 3,
     )
-    table = calibration.report(found, predicted)
+    predicted, at_point = (
+        calibration.predictive(found, seed=args.seed + 1, workers=args.workers,
+                               scheduler=args.scheduler, at_point=point)
+        for point in (False, True)
+    )
+    table = calibration.report(found, predicted, point_predicted=at_point)
     print(calibration.format_report(found, table))
-    paths = calibration.save(found, predicted, table, out)
+    paths = calibration.save(found, predicted, table, out, point_predicted=at_point)
     print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
 
 

@@ -85,6 +85,7 @@ __all__ = [
     "calibrate",
     "predictive",
     "report",
+    "refine",
     "save",
     "load",
 ]
@@ -179,22 +180,23 @@ PARAMETERS: dict[str, Parameter] = {
     p.name: p
     for p in (
         Parameter(
-            "maze_reach", 0.10, 0.16,
-            "how far each maze block juts in (m): at 10 cm the side gaps are as wide as "
-            "the blocks, at 16 cm a 4 cm gap is left (a hand still passes it in one "
-            "stroke); the bundled 13 cm in the middle",
+            "maze_reach", 0.12, 0.17,
+            "how far each maze block juts in (m): from 12 cm (an 8 cm side gap) to 17 cm "
+            "(a 3 cm gap, which a hand still passes in one stroke); a first calibration "
+            "with 10-16 cm piled its particles at 16 cm",
             _block(0),
         ),
         Parameter(
-            "maze_low", 0.075, 0.12,
+            "maze_low", 0.075, 0.11,
             "where block 1 starts (m, its lower edge): from 1.5 cm above the start zone "
-            "(the paths must turn at once) to 12 cm",
+            "(the paths must turn at once) to 11 cm (so two blocks at their highest and "
+            "the narrowest gap still fit below the target)",
             _block(1),
         ),
         Parameter(
-            "maze_height", 0.02, 0.045,
-            "each block's height (m): from a thin wall to 4.5 cm (higher ones would leave "
-            "no room for a gap at the highest start)",
+            "maze_height", 0.02, 0.05,
+            "each block's height (m): from a thin wall to 5 cm (block 1 at its lowest, "
+            "two 5 cm blocks and the narrowest gap still end 3 cm below the target)",
             _block(2),
         ),
         Parameter(
@@ -449,6 +451,12 @@ class Calibration:
     seed : int
     where : str
         The executor it ran on.
+    chosen : dict or None
+        The bundled point, once :func:`refine` has chosen it: the posterior particle
+        whose fresh-seed studies come closest to the paper on average.
+    refined : DataFrame or None
+        :func:`refine`'s table: per candidate particle, its parameters, its ABC
+        distance and its mean distance over the fresh seeds.
     """
 
     particles: pd.DataFrame
@@ -457,6 +465,8 @@ class Calibration:
     seconds: float
     seed: int
     where: str = ""
+    chosen: dict | None = None
+    refined: pd.DataFrame | None = None
 
     def point(self) -> dict:
         """The posterior's weighted median of each parameter (the bundled population)."""
@@ -468,6 +478,10 @@ class Calibration:
             cum = np.cumsum(w[order]) / w.sum()
             out[name] = float(v[order][np.searchsorted(cum, 0.5)])
         return out
+
+    def bundled(self) -> dict:
+        """The point the tutor bundles: :func:`refine`'s choice, else :meth:`point`."""
+        return dict(self.chosen) if self.chosen is not None else self.point()
 
     def draw(self, k: int, rng) -> list[dict]:
         """``k`` parameter sets drawn from the posterior (by weight, with replacement)."""
@@ -537,6 +551,7 @@ def calibrate(budget: Budget = FULL_BUDGET, seed: int = 0, workers=None, schedul
             history = abc.run(max_nr_populations=budget.generations)
             seconds = time.perf_counter() - started
             frame, weights = history.get_distribution()
+            distances = history.get_weighted_distances()["distance"].to_numpy()
             pops = history.get_all_populations()
         where = engine.where
     particles = pd.DataFrame({
@@ -544,18 +559,63 @@ def calibrate(budget: Budget = FULL_BUDGET, seed: int = 0, workers=None, schedul
         for n in names
     })
     particles["weight"] = np.asarray(weights, dtype=float)
+    particles["distance"] = np.asarray(distances, dtype=float)
     gens = pops[pops.t >= 0][["t", "epsilon", "particles", "samples"]].rename(
         columns={"t": "generation", "samples": "simulations"}
     ).reset_index(drop=True)
     return Calibration(particles, gens, budget, seconds, int(seed), where)
 
 
+# ---------------------------------------------------------------- the bundled point
+
+
+def refine(calibration: Calibration, candidates: int = 6, seeds: int = 3, seed: int = 2,
+           workers=None, scheduler=None) -> Calibration:
+    """Choose the bundled point among the posterior's best particles.
+
+    The posterior of a small ABC-SMC budget is wide, and its marginal medians
+    (:meth:`Calibration.point`) need not be a population that fits: the maze's
+    difficulty turns sharply with the blocks' reach, so a median of reaches can be a
+    maze easier than any good particle's. So the ``candidates`` particles of the last
+    generation with the smallest ABC distance each simulate ``seeds`` further studies
+    with fresh seeds (the same seeds for every candidate: common random numbers), and
+    the one whose mean distance to the paper is smallest becomes ``chosen``.
+    """
+    parts = calibration.particles
+    if "distance" not in parts:
+        raise InvalidParameterError(
+            "this calibration has no particle distances (written by an older version); "
+            "rerun lfd-tutor calibrate"
+        )
+    best = parts.nsmallest(min(candidates, len(parts)), "distance")
+    budget = calibration.budget
+    names = [n for n, st in STATISTICS.items() if st.fitted]
+    rows = []
+    with Engine(workers, scheduler) as engine:
+        for _, particle in best.iterrows():
+            theta = {n: float(particle[n]) for n in PARAMETERS}
+            d = [
+                distance(simulate(theta, 2 * 10**6 + seed * 1000 + k, budget.n1, budget.n2,
+                                  engine), names)
+                for k in range(seeds)
+            ]
+            rows.append({**theta, "abc_distance": float(particle["distance"]),
+                         "mean_distance": float(np.mean(d))})
+    table = pd.DataFrame(rows)
+    top = table.loc[table.mean_distance.idxmin()]
+    chosen = {n: float(top[n]) for n in PARAMETERS}
+    return dataclasses.replace(calibration, chosen=chosen, refined=table)
+
+
 # ---------------------------------------------------------------- validation
 
 
 def predictive(calibration: Calibration, seed: int = 1, workers=None,
-               scheduler=None) -> pd.DataFrame:
+               scheduler=None, at_point: bool = False) -> pd.DataFrame:
     """Posterior predictive statistics: one row per posterior draw, every statistic.
+
+    With ``at_point`` every row is the bundled point (:meth:`Calibration.bundled`) with
+    its own fresh seed instead: what the bundled population itself predicts.
 
     Each draw simulates Experiment 1 and all four conditions of Experiment 2 at the
     paper's sizes (the quick budget's small ones when ``budget.quick``), with fresh
@@ -563,7 +623,9 @@ def predictive(calibration: Calibration, seed: int = 1, workers=None,
     """
     budget = calibration.budget
     rng = np.random.default_rng(np.random.SeedSequence([seed, 7]))
-    thetas = calibration.draw(budget.draws, rng)
+    thetas = calibration.draw(budget.draws, rng) if not at_point else (
+        [calibration.bundled()] * budget.draws
+    )
     n1 = budget.n1 if budget.quick else paper.MAZE_N_TEACHERS
     n2 = budget.n2 if budget.quick else paper.PICKPLACE_N_TEACHERS // 4
     rows = []
@@ -575,20 +637,29 @@ def predictive(calibration: Calibration, seed: int = 1, workers=None,
     return pd.DataFrame(rows)
 
 
-def report(calibration: Calibration, predicted: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
-    """Each statistic's paper value, posterior predictive median and ``level`` interval,
-    and whether the paper's value lies inside (one row per statistic)."""
+def _intervals(predicted: pd.DataFrame | None, name: str, level: float):
     lo_q, hi_q = (1 - level) / 2, 1 - (1 - level) / 2
+    if predicted is None or name not in predicted or predicted[name].dropna().empty:
+        return math.nan, math.nan, math.nan
+    values = predicted[name].dropna()
+    return tuple(float(values.quantile(q)) for q in (lo_q, 0.5, hi_q))
+
+
+def report(calibration: Calibration, predicted: pd.DataFrame, level: float = 0.9,
+           point_predicted: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Each statistic's paper value, posterior predictive median and ``level`` interval,
+    and whether the paper's value lies inside (one row per statistic); with
+    ``point_predicted`` (:func:`predictive` ``at_point``), the same for the bundled point
+    in the ``point_*`` columns."""
     rows = []
     for name, s in STATISTICS.items():
-        values = predicted[name].dropna() if name in predicted else pd.Series(dtype=float)
-        if values.empty:
-            low = high = median = math.nan
-        else:
-            low, median, high = (float(values.quantile(q)) for q in (lo_q, 0.5, hi_q))
+        low, median, high = _intervals(predicted, name, level)
+        p_low, p_median, p_high = _intervals(point_predicted, name, level)
         rows.append({
             "statistic": name, "fitted": s.fitted, "paper": s.value, "median": median,
             "low": low, "high": high, "inside": bool(low <= s.value <= high),
+            "point_median": p_median, "point_low": p_low, "point_high": p_high,
+            "point_inside": bool(p_low <= s.value <= p_high),
         })
     return pd.DataFrame(rows)
 
@@ -596,43 +667,62 @@ def report(calibration: Calibration, predicted: pd.DataFrame, level: float = 0.9
 def format_report(calibration: Calibration, table: pd.DataFrame) -> str:
     """The calibration report in plain text."""
     b = calibration.budget
-    held = table[~table.fitted]
     lines = [
         "Calibration of the simulated teachers and the maze (ABC-SMC, pyabc)",
         f"budget: {b.population_size} particles x {b.generations} generations, Exp 1 "
-        f"cohorts of {b.n1}, Exp 2 NF groups of {b.n2}; {b.draws} posterior draws"
+        f"cohorts of {b.n1}, Exp 2 NF groups of {b.n2}; {b.draws} predictive draws"
         + (" (quick: not a result)" if b.quick else ""),
         f"simulated studies: {int(calibration.generations.simulations.sum())}, "
         f"{calibration.seconds:.0f} s on {calibration.where}",
         "tolerance per generation: "
         + ", ".join(f"{e:.2f}" for e in calibration.generations.epsilon),
         "",
-        "posterior (weighted median; 5 % .. 95 %):",
+        "posterior (weighted median; 5 % .. 95 %)"
+        + ("; the bundled point, chosen by refine:" if calibration.chosen else ":"),
     ]
     w = calibration.particles.weight.to_numpy()
-    point = calibration.point()
+    point, bundled = calibration.point(), calibration.bundled()
     for name, p in PARAMETERS.items():
         v = calibration.particles[name].to_numpy()
         order = np.argsort(v)
         cum = np.cumsum(w[order]) / w.sum()
         lo, hi = v[order][np.searchsorted(cum, 0.05)], v[order][min(np.searchsorted(cum, 0.95),
                                                                     len(v) - 1)]
-        lines.append(f"  {name}: {point[name]:.4g} ({lo:.4g} .. {hi:.4g}); prior "
+        chosen = f"; bundled {bundled[name]:.4g}" if calibration.chosen else ""
+        lines.append(f"  {name}: {point[name]:.4g} ({lo:.4g} .. {hi:.4g}){chosen}; prior "
                      f"{'log-' if p.log else ''}uniform {p.low:g} .. {p.high:g}")
-    lines += ["", "statistic: paper, predictive median [90 % interval], inside?"]
-    for fitted, title in ((True, "fitted"), (False, "held out")):
-        lines.append(f"  {title}:")
-        for r in table[table.fitted == fitted].itertuples():
-            lines.append(f"    {r.statistic}: {r.paper:.4g}, {r.median:.4g} "
-                         f"[{r.low:.4g}, {r.high:.4g}] {'yes' if r.inside else 'NO'}")
-    share = held.inside.mean() if len(held) else math.nan
-    lines += ["", f"held-out statistics inside their 90 % interval: {int(held.inside.sum())} "
-                  f"of {len(held)} ({share:.0%}; target at least 80 %)"]
+    if calibration.refined is not None:
+        r = calibration.refined
+        lines += ["", f"the bundled point: of the {len(r)} particles of the last generation "
+                      "closest to the paper, the one whose fresh-seed studies come closest "
+                      "on average (distance: ABC's, mean over the fresh seeds):"]
+        for k, row in r.iterrows():
+            mark = "  <- bundled" if k == r.mean_distance.idxmin() else ""
+            lines.append(f"    particle {k}: {row.abc_distance:.2f}, {row.mean_distance:.2f}"
+                         + mark)
+    checks = [("", "posterior predictive (draws from the posterior)")]
+    if "point_inside" in table and table.point_median.notna().any():
+        checks.append(("point_", "the bundled point (fresh seeds)"))
+    for prefix, title in checks:
+        lines += ["", f"{title}: statistic: paper, median [90 % interval], inside?"]
+        for fitted, kind in ((True, "fitted"), (False, "held out")):
+            lines.append(f"  {kind}:")
+            for r in table[table.fitted == fitted].to_dict(orient="records"):
+                lines.append(
+                    f"    {r['statistic']}: {r['paper']:.4g}, {r[prefix + 'median']:.4g} "
+                    f"[{r[prefix + 'low']:.4g}, {r[prefix + 'high']:.4g}] "
+                    f"{'yes' if r[prefix + 'inside'] else 'NO'}"
+                )
+        held = table[~table.fitted][prefix + "inside"]
+        share = held.mean() if len(held) else math.nan
+        lines.append(f"  held-out statistics inside their 90 % interval: {int(held.sum())} "
+                     f"of {len(held)} ({share:.0%}; target at least 80 %)")
     return "\n".join(lines)
 
 
-def save(calibration: Calibration, predicted: pd.DataFrame, table: pd.DataFrame, out) -> dict:
-    """Write the posterior, the predictive draws, the report and the point estimate."""
+def save(calibration: Calibration, predicted: pd.DataFrame, table: pd.DataFrame, out,
+         point_predicted: pd.DataFrame | None = None) -> dict:
+    """Write the posterior, the predictive draws, the report and the bundled point."""
     from .report import check_out_dir
 
     out = check_out_dir(out)
@@ -646,16 +736,26 @@ def save(calibration: Calibration, predicted: pd.DataFrame, table: pd.DataFrame,
     atomic_write_text(paths["posterior"], calibration.particles.to_csv(index=False))
     atomic_write_text(paths["generations"], calibration.generations.to_csv(index=False))
     atomic_write_text(paths["predictive"], predicted.to_csv(index=False))
+    if point_predicted is not None:
+        paths["point predictive"] = out / "calibration_point_predictive.csv"
+        atomic_write_text(paths["point predictive"], point_predicted.to_csv(index=False))
+    if calibration.refined is not None:
+        paths["refined"] = out / "calibration_refined.csv"
+        atomic_write_text(paths["refined"], calibration.refined.to_csv(index=False))
     atomic_write_text(paths["report"], format_report(calibration, table) + "\n")
+    held = table[~table.fitted]
     summary = {
         "point": calibration.point(),
+        "chosen": calibration.chosen,
         "budget": calibration.budget.to_dict(),
         "seed": calibration.seed,
         "seconds": calibration.seconds,
         "where": calibration.where,
         "simulations": int(calibration.generations.simulations.sum()),
         "statistics": table.to_dict(orient="records"),
-        "held_out_inside": float(table[~table.fitted].inside.mean()),
+        "held_out_inside": float(held.inside.mean()),
+        "held_out_inside_at_point": float(held.point_inside.mean())
+        if point_predicted is not None else None,
     }
     atomic_write_text(paths["summary"], json.dumps(summary, indent=2, default=float) + "\n")
     return paths
@@ -688,8 +788,13 @@ def load(folder=None) -> tuple[Calibration, pd.DataFrame, pd.DataFrame]:
         predicted = pd.read_csv(where / "calibration_predictive.csv")
         table = pd.DataFrame(summary["statistics"])
         budget = Budget(**summary["budget"])
+        refined_path = where / "calibration_refined.csv"
+        refined = pd.read_csv(refined_path) if refined_path.exists() else None
+        chosen = summary.get("chosen")
         found = Calibration(particles, gens, budget, float(summary["seconds"]),
-                            int(summary["seed"]), str(summary.get("where", "")))
+                            int(summary["seed"]), str(summary.get("where", "")),
+                            None if chosen is None else {k: float(v) for k, v in chosen.items()},
+                            refined)
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise InvalidFileError(
             f"{where} does not hold a calibration as `lfd-tutor calibrate --out` writes it "
@@ -701,6 +806,7 @@ def load(folder=None) -> tuple[Calibration, pd.DataFrame, pd.DataFrame]:
             f"{where}: the calibration files lack {missing or 'report columns'}; they were "
             "written by another version: rerun `lfd-tutor calibrate --out` into that folder"
         )
-    table["fitted"] = table["fitted"].astype(bool)
-    table["inside"] = table["inside"].astype(bool)
+    for column in ("fitted", "inside", "point_inside"):
+        if column in table:
+            table[column] = table[column].astype(bool)
     return found, predicted, table

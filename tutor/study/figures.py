@@ -315,14 +315,16 @@ FIGURES = {1: experiment1_figure, 2: experiment2_figure}
 
 
 def calibration_figure(table: pd.DataFrame):
-    """The calibration's posterior predictive check: one row per statistic.
+    """The calibration's predictive checks: one row per statistic.
 
-    ``table`` is :func:`tutor.study.calibration.report`'s. Each row draws the 90 %
-    predictive interval and its median as distances from the paper's value, in the
-    statistic's own scale (the one the fit measured distance in: a quarter of the
-    paper's value for an η, a few counts for a failure count), so every statistic fits
-    one axis; the paper's value is the line at 0, and the row's label gives it in its
-    own units. Fitted statistics are drawn in blue, held-out ones in orange.
+    ``table`` is :func:`tutor.study.calibration.report`'s. Each row draws 90 %
+    predictive intervals as distances from the paper's value, in the statistic's own
+    scale (the one the fit measured distance in: a quarter of the paper's value for an
+    η, a few counts for a failure count), so every statistic fits one axis; the paper's
+    value is the line at 0, and the row's label gives it in its own units. The thick bar
+    and dot are the bundled point's interval and median (fresh seeds), the thin line
+    the posterior's; fitted statistics are blue, held-out ones orange, and a cross marks
+    a statistic whose bundled-point interval misses the paper's value.
 
     Returns
     -------
@@ -331,16 +333,21 @@ def calibration_figure(table: pd.DataFrame):
     from .calibration import STATISTICS
 
     rows = table.reset_index(drop=True)
+    point = "point_median" in rows and rows.point_median.notna().any()
+    main = "point_" if point else ""
     fig, ax = plt.subplots(figsize=(9, 0.32 * len(rows) + 1.6), layout="constrained")
     colours = {True: "#3182bd", False: "#e6550d"}
     y = np.arange(len(rows))[::-1]
-    for k, r in rows.iterrows():
-        scale = STATISTICS[r.statistic].scale
-        lo, mid, hi = ((v - r.paper) / scale for v in (r.low, r["median"], r.high))
-        c = colours[bool(r.fitted)]
-        ax.plot([lo, hi], [y[k], y[k]], color=c, lw=3, solid_capstyle="butt")
+    for k, r in enumerate(rows.to_dict(orient="records")):
+        scale = STATISTICS[r["statistic"]].scale
+        c = colours[bool(r["fitted"])]
+        if point:  # the posterior's interval, thin
+            lo, hi = ((r[v] - r["paper"]) / scale for v in ("low", "high"))
+            ax.plot([lo, hi], [y[k], y[k]], color=c, lw=1)
+        lo, mid, hi = ((r[main + v] - r["paper"]) / scale for v in ("low", "median", "high"))
+        ax.plot([lo, hi], [y[k], y[k]], color=c, lw=4, solid_capstyle="butt")
         ax.plot(mid, y[k], "o", color=c, ms=5)
-        if not r.inside:
+        if not r[main + "inside"]:
             ax.plot(max(min(mid, 9.5), -9.5), y[k], "x", color="black", ms=7)
     shown = [f"{r.statistic} (paper {r.paper:.3g})" for r in rows.itertuples()]
     ax.set_yticks(y, shown, fontsize=8)
@@ -349,11 +356,14 @@ def calibration_figure(table: pd.DataFrame):
     ax.set_xlim(-10, 10)
     ax.set_xlabel("predicted minus the paper's value, in the statistic's scale "
                   "(grey: within one scale)")
-    ax.plot([], [], color=colours[True], lw=3, label="fitted: 90 % predictive interval")
-    ax.plot([], [], color=colours[False], lw=3, label="held out: 90 % predictive interval")
+    who = "bundled point" if point else "posterior"
+    ax.plot([], [], color=colours[True], lw=4, label=f"fitted: {who}'s 90 % interval")
+    ax.plot([], [], color=colours[False], lw=4, label=f"held out: {who}'s 90 % interval")
+    if point:
+        ax.plot([], [], color="grey", lw=1, label="the posterior's 90 % interval")
     ax.plot([], [], "x", color="black", label="paper's value outside the interval")
-    inside = rows[~rows.fitted.astype(bool)].inside.astype(bool)
-    ax.set_title(f"Calibration check: the paper's value inside the interval for "
+    inside = rows[~rows.fitted.astype(bool)][main + "inside"].astype(bool)
+    ax.set_title(f"Calibration check ({who}): the paper's value inside the interval for "
                  f"{int(inside.sum())} of {len(inside)} held-out statistics")
     _legend_below(ax, 2, drop=0.12)
     return fig
