@@ -33,7 +33,8 @@ from tutor.teachers.traits import DEFAULT_POPULATION
 
 ROOT = Path(__file__).resolve().parents[1]
 FILES = ("calibration_posterior.csv", "calibration_generations.csv",
-         "calibration_predictive.csv", "calibration_report.txt", "calibration_summary.json")
+         "calibration_predictive.csv", "calibration_point_predictive.csv",
+         "calibration_refined.csv", "calibration_report.txt", "calibration_summary.json")
 
 
 def _number(v) -> str:
