@@ -8,7 +8,9 @@ not see.
 
 **Free parameters** :math:`\theta` (:data:`PARAMETERS`, a registry: name -> prior and
 where it goes). Nothing is per condition: one population and one maze serve every
-condition of both experiments.
+condition of both experiments. A maze the learner is unsteady on (one more demo where
+the robot fails can cost a third of its efficacy: :mod:`tutor.study.steadiness`) is
+kept out: it simulates nothing and lies far from the paper.
 
 **Summary statistics** :math:`s(\theta)` (:data:`STATISTICS`): what the paper reports
 that a simulated cohort can give back. The *fitted* ones are Experiment 1 (the three
@@ -68,6 +70,7 @@ from ..fileio import atomic_write_text
 from ..tasks.maze import load_layout
 from ..teachers.traits import DEFAULT_POPULATION, Population
 from .cohort import StudySettings, run_experiment
+from .steadiness import steadiness_of_blocks
 
 __all__ = [
     "Parameter",
@@ -183,7 +186,8 @@ PARAMETERS: dict[str, Parameter] = {
             "maze_reach", 0.12, 0.17,
             "how far each maze block juts in (m): from 12 cm (an 8 cm side gap) to 17 cm "
             "(a 3 cm gap, which a hand still passes in one stroke); a first calibration "
-            "with 10-16 cm piled its particles at 16 cm",
+            "with 10-16 cm piled its particles at 16 cm. Mazes the learner is unsteady "
+            "on (from about 16 cm) simulate nothing: tutor.study.steadiness",
             _block(0),
         ),
         Parameter(
@@ -421,8 +425,14 @@ def simulate(theta: dict, seed: int, n1: int, n2: int, engine: Engine,
 
     Experiment 1 with ``n1`` teachers and Experiment 2 with ``n2`` teachers in each of
     ``experiment2_conditions`` (the fit uses NF alone; the predictive check all four).
+    A maze the learner is unsteady on (:mod:`tutor.study.steadiness`) simulates nothing
+    and gives no statistics, so the distance puts it far from the paper.
     """
     population, settings = apply(theta)
+    if settings.maze_blocks is not None and not steadiness_of_blocks(
+        tuple(settings.maze_blocks)
+    ).steady:
+        return {}  # a maze the learner is unsteady on: every statistic missing, far away
     exp1 = run_experiment(1, seed=seed, n=n1, population=population, settings=settings,
                           progress=False, engine=engine).runs
     conditions = tuple(experiment2_conditions)
