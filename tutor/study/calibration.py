@@ -168,6 +168,11 @@ def _setup(population, settings, value):  # a 50 s wide uniform around the middl
     return dataclasses.replace(population, setup_low=low, setup_high=float(value) + 25.0), settings
 
 
+def _heed(population, settings, value):  # a 0.5 wide uniform around the middle, in 0-1
+    low, high = max(0.0, float(value) - 0.25), min(1.0, float(value) + 0.25)
+    return dataclasses.replace(population, heed_low=low, heed_high=high), settings
+
+
 def _beta_mean(a: str, b: str, concentration: float):
     def put(population, settings, value):
         value = float(value)
@@ -262,6 +267,13 @@ PARAMETERS: dict[str, Parameter] = {
             "seconds per pick-and-place demo besides the motion (uniform, 50 s wide, "
             "around this middle)",
             _setup,
+        ),
+        Parameter(
+            "heed_middle", 0.0, 1.0,
+            "how often a teacher shown failures chooses the next demo from the picture "
+            "rather than from their own plan (uniform, 0.5 wide around this middle, "
+            "clipped to 0-1; the hand-set model's teachers always do)",
+            _heed,
         ),
     )
 }

@@ -137,7 +137,8 @@ class MazeTeacher:
             start, _ = model.next_target(avoid=np.flatnonzero(model.belief.demonstrated))
             return start, f"rule {advice.rule}"
         inside = np.linalg.norm(model.points - advice.center, axis=1) <= advice.radius
-        worst = model.belief.worst_region(within=inside)
+        # not reading the picture this time: the rule's circle itself, around its centre
+        worst = model.belief.worst_region(within=inside) if model.heeds() else None
         target = advice.center if worst is None else worst
         start = model.aim(target, center=advice.center, radius=advice.radius)
         return start, f"rule {advice.rule}"

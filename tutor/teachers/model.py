@@ -28,7 +28,8 @@ a. (pick-and-place) if the robot was just seen failing at the plant the teacher
    plant (``notice_rate``), they take the demo back and show it again (at most
    twice in a row);
 b. otherwise, if some realisation is remembered failing, they aim at the densest
-   failing region (with their aiming imprecision ``aim_sd``);
+   failing region (with their aiming imprecision ``aim_sd``), unless this time they
+   go by their own plan regardless (chance 1 - ``heed``);
 c. otherwise they follow their own plan of where demos should go (their idea of B,
    :math:`\tilde B`: around ``plan_focus`` with scatter ``plan_spread_*``, weighing
    ``plan_choices_*`` places and taking the one farthest from their demos), now and then
@@ -250,9 +251,14 @@ class TeacherModel:
     def next_target(self, avoid=()) -> tuple[np.ndarray, str]:
         """Rules (b) and (c): aim at the worst region seen, else follow the plan."""
         worst = self.belief.worst_region()
-        if worst is not None:
+        if worst is not None and self.heeds():
             return self.aim(worst), "red"
         return self.aim(self.plan_point(avoid)), "plan"
+
+    def heeds(self) -> bool:
+        """Whether this time the teacher chooses from the picture (chance ``heed``; a
+        teacher who always heeds draws nothing, so their run is as before the trait)."""
+        return self.traits.heed >= 1.0 or bool(self.rng.random() < self.traits.heed)
 
     def satisfied(self, n_demos: int) -> bool:
         """Whether the teacher believes the robot now does enough of the task."""

@@ -89,6 +89,11 @@ class TeacherTraits:
         Chance that they demonstrate the plant the next-demo hint names (HF, beyond the
         paper) instead of one of their own choosing. Used only in HF. A teacher made by
         hand rather than drawn from a :class:`Population` follows half the hints.
+    heed : float
+        Chance that, with failures shown on the picture (VF, VR; RF, BF, SF), they
+        choose the next demo by reading the picture (its worst red region) rather than
+        from their own plan. People look at feedback without always acting on it; 1
+        (the default) always acts on it. It changes nothing where nothing is shown (NF).
     """
 
     enough_maze: int
@@ -108,6 +113,7 @@ class TeacherTraits:
     notice_rate: float
     repeat_rate: float
     compliance: float = 0.5
+    heed: float = 1.0
 
     def _for(self, trait: str, task: str):
         if task not in TASKS:
@@ -225,6 +231,11 @@ class Population:
         robot would learn most from this plant next" is that most follow it most of
         the time and some prefer their own plan. The adaptive study sets it to 0.5 and
         1 instead (``dataclasses.replace``) to bracket the effect.
+    heed_low, heed_high
+        ``heed`` ~ uniform (both 1 by default: every teacher reads the picture every
+        time). Drawn after ``compliance`` and only when the two differ, so a population
+        whose teachers all heed draws every other trait exactly as before the trait
+        existed. A free parameter of the calibration (:mod:`tutor.study.calibration`).
     """
 
     enough_median_maze: float = 4.0
@@ -257,6 +268,8 @@ class Population:
     repeat_b: float = 8.5
     compliance_low: float = 0.4
     compliance_high: float = 1.0
+    heed_low: float = 1.0
+    heed_high: float = 1.0
 
     def __post_init__(self):
         lo, hi = self.enough_range
@@ -294,6 +307,7 @@ class Population:
                 0 <= self.compliance_low <= self.compliance_high <= 1,
                 "need 0 <= compliance_low <= compliance_high <= 1",
             ),
+            (0 <= self.heed_low <= self.heed_high <= 1, "need 0 <= heed_low <= heed_high <= 1"),
         ]
         for ok, message in checks:
             if not ok:
@@ -328,6 +342,10 @@ class Population:
             repeat_rate=float(rng.beta(self.repeat_a, self.repeat_b)),
             # last: the draws of every trait above are those of a population without it
             compliance=float(rng.uniform(self.compliance_low, self.compliance_high)),
+            heed=(
+                float(self.heed_low) if self.heed_low == self.heed_high
+                else float(rng.uniform(self.heed_low, self.heed_high))
+            ),
         )
 
     def to_dict(self) -> dict:
