@@ -84,6 +84,9 @@ def test_every_parameter_lands_where_it_says():
     assert mean_slip == pytest.approx(theta["slip_mean"])
     middle = (population.setup_low + population.setup_high) / 2
     assert middle == pytest.approx(theta["setup_middle"])
+    assert (population.heed_low, population.heed_high) == pytest.approx(
+        (max(0.0, theta["heed_middle"] - 0.25), theta["heed_middle"] + 0.25)
+    )
     assert population.aim_low == DEFAULT_POPULATION.aim_low  # what is not free stays
     for p in calibration.PARAMETERS.values():  # the unit scale round-trips
         for u in (0.0, 0.3, 1.0):

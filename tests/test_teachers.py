@@ -16,7 +16,7 @@ from tutor.tasks.maze_rules import advise_from
 from tutor.tasks.pickplace import PickPlaceTask
 from tutor.tasks.pickplace_protocol import PickPlaceRun
 from tutor.teachers.maze import MazeTeacher
-from tutor.teachers.model import CLUSTER, Belief
+from tutor.teachers.model import CLUSTER, Belief, TeacherModel
 from tutor.teachers.pickplace import MAX_RETRIES, PickPlaceTeacher
 from tutor.teachers.traits import DEFAULT_POPULATION, Population, TeacherTraits
 
@@ -79,6 +79,47 @@ def test_population_rejects_impossible_settings():
         Population(satisfaction_low=0.9, satisfaction_high=1.2)
     with pytest.raises(InvalidParameterError, match="enough_range"):
         Population(enough_range=(5, 2))
+    with pytest.raises(InvalidParameterError, match="heed"):
+        Population(heed_low=0.8, heed_high=0.5)
+
+
+def test_heed_is_drawn_last_and_only_when_it_varies():
+    # a population whose teachers all heed draws every trait as before heed existed
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        t = DEFAULT_POPULATION.sample(rng)
+        after = rng.random()
+        mixed = dataclasses.replace(DEFAULT_POPULATION, heed_low=0.2, heed_high=0.6)
+        rng2 = np.random.default_rng(seed)
+        u = mixed.sample(rng2)
+        assert t.heed == 1.0 and 0.2 <= u.heed <= 0.6
+        assert dataclasses.replace(u, heed=1.0) == t  # every other trait the same draw
+        assert rng2.random() != after  # heed took one draw from the same stream
+
+
+def test_a_teacher_who_never_heeds_follows_their_plan_even_when_shown_red():
+    pts = np.array([[x, y] for y in range(5) for x in range(5)], float)
+    seen_failing = ([24, 23, 19, 18], [False] * 4)
+
+    def targets(heed):
+        model = TeacherModel(traits(heed=heed, aim_sd=1e-6, plan_focus=(0.0, 0.0),
+                                    plan_spread_maze=1e-6),
+                             np.random.default_rng(3), pts, pts.min(0), pts.max(0), "maze")
+        model.belief.observe(*seen_failing)
+        return [model.next_target()[1] for _ in range(40)]
+
+    assert set(targets(1.0)) == {"red"}
+    assert set(targets(0.0)) == {"plan"}
+    half = targets(0.5)
+    assert 5 < half.count("red") < 35  # about half of the time
+
+
+def test_heed_changes_nothing_without_feedback(maze_task):
+    a = MazeTeacher(traits(heed=1.0), maze_task).teach("NF", 4)
+    b = MazeTeacher(traits(heed=0.0), maze_task).teach("NF", 4)
+    assert a.n_demos == b.n_demos
+    for x, y in zip(a.session.demos, b.session.demos, strict=True):
+        np.testing.assert_array_equal(x, y)
 
 
 # --------------------------------------------------------------------------- belief (omega)
