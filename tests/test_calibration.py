@@ -216,3 +216,15 @@ def test_refine_needs_the_particles_distances():
     with pytest.raises(InvalidParameterError, match="rerun lfd-tutor calibrate"):
         calibration.refine(old)
 
+
+
+def test_the_posterior_quantiles_follow_the_particles_weights():
+    names = list(calibration.PARAMETERS)
+    rows = [{n: calibration.PARAMETERS[n].from_unit(u) for n in names} for u in (0.1, 0.5, 0.9)]
+    particles = pd.DataFrame(rows)
+    particles["weight"] = [0.1, 0.1, 0.8]  # the last particle holds most of the mass
+    found = calibration.Calibration(particles, pd.DataFrame(), calibration.QUICK_BUDGET, 0.0, 0)
+    name = names[0]
+    assert found.quantile(name, 0.05) == pytest.approx(rows[0][name])
+    assert found.point()[name] == found.quantile(name, 0.5) == pytest.approx(rows[2][name])
+    assert found.quantile(name, 0.99) == pytest.approx(rows[2][name])

@@ -490,16 +490,17 @@ class Calibration:
     chosen: dict | None = None
     refined: pd.DataFrame | None = None
 
-    def point(self) -> dict:
-        """The posterior's weighted median of each parameter (the bundled population)."""
+    def quantile(self, name: str, q: float) -> float:
+        """The posterior's weighted ``q`` quantile of parameter ``name``."""
         w = self.particles["weight"].to_numpy()
-        out = {}
-        for name in PARAMETERS:
-            v = self.particles[name].to_numpy()
-            order = np.argsort(v)
-            cum = np.cumsum(w[order]) / w.sum()
-            out[name] = float(v[order][np.searchsorted(cum, 0.5)])
-        return out
+        v = self.particles[name].to_numpy()
+        order = np.argsort(v)
+        cum = np.cumsum(w[order]) / w.sum()
+        return float(v[order][min(np.searchsorted(cum, q), len(v) - 1)])
+
+    def point(self) -> dict:
+        """The posterior's weighted median of each parameter."""
+        return {name: self.quantile(name, 0.5) for name in PARAMETERS}
 
     def bundled(self) -> dict:
         """The point the tutor bundles: :func:`refine`'s choice, else :meth:`point`."""
@@ -702,14 +703,9 @@ def format_report(calibration: Calibration, table: pd.DataFrame) -> str:
         "posterior (weighted median; 5 % .. 95 %)"
         + ("; the bundled point, chosen by refine:" if calibration.chosen else ":"),
     ]
-    w = calibration.particles.weight.to_numpy()
     point, bundled = calibration.point(), calibration.bundled()
     for name, p in PARAMETERS.items():
-        v = calibration.particles[name].to_numpy()
-        order = np.argsort(v)
-        cum = np.cumsum(w[order]) / w.sum()
-        lo, hi = v[order][np.searchsorted(cum, 0.05)], v[order][min(np.searchsorted(cum, 0.95),
-                                                                    len(v) - 1)]
+        lo, hi = calibration.quantile(name, 0.05), calibration.quantile(name, 0.95)
         chosen = f"; bundled {bundled[name]:.4g}" if calibration.chosen else ""
         lines.append(f"  {name}: {point[name]:.4g} ({lo:.4g} .. {hi:.4g}){chosen}; prior "
                      f"{'log-' if p.log else ''}uniform {p.low:g} .. {p.high:g}")
