@@ -13,7 +13,6 @@ Run:  .venv/bin/python scripts/make_maze_demo_sets.py
 from __future__ import annotations
 
 import argparse
-import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -31,18 +30,11 @@ RATE_HZ = 80.0
 def recording(layout, start, rng, guide_shift=None, end_shift=(0.0, 0.0)):
     """A stroke from ``start`` as an 80 Hz recording (t in s, x and y in m)."""
     duration = rng.uniform(2.0, 3.5)
-    n = int(duration * RATE_HZ) + 1
-    guides = layout.guide_points.copy()
-    if guide_shift is not None:
-        guides = guides + np.asarray(guide_shift)
-    scripted = dataclasses.replace(layout, guide_points=guides)
-    path = scripted.reference_path(start, rng, jitter=0.003, n_samples=n)
-    s = path[:, 0]
-    tremor = rng.normal(scale=0.0015, size=(n, 2))
-    kernel = np.hanning(9) / np.hanning(9).sum()
-    tremor = np.column_stack([np.convolve(tremor[:, i], kernel, mode="same") for i in range(2)])
-    xy = path[:, 1:] + tremor * np.sin(np.pi * s)[:, None] + np.outer(s**3, end_shift)
-    return np.column_stack([s * duration, xy])
+    guides = layout.guide_points if guide_shift is None else (
+        layout.guide_points + np.asarray(guide_shift)
+    )
+    return layout.hand_stroke(start, rng, duration, jitter=0.003, tremor=0.0015,
+                              guides=guides, end_shift=end_shift, rate_hz=RATE_HZ)
 
 
 SETS = {

@@ -243,6 +243,33 @@ class MazeLayout:
         tau = np.linspace(0.0, 1.0, n)
         return np.column_stack([tau, xy])
 
+    def hand_stroke(self, start, rng, duration: float, *, jitter: float, tremor: float,
+                    guides=None, end_shift=(0.0, 0.0), rate_hz: float = 80.0) -> np.ndarray:
+        """A stroke from ``start`` as a hand draws it, recorded at ``rate_hz``.
+
+        The scripted path (:meth:`reference_path` through ``guides``, default the
+        layout's, each moved by ``jitter``) plus a smoothed tremor of standard deviation
+        ``tremor`` (m) that fades out at both ends, and an ``end_shift`` (m) growing
+        towards the end (a stroke that misses the target). The simulated teachers and
+        the bundled demo sets draw their strokes here.
+
+        Returns
+        -------
+        ndarray (n, 3)
+            Columns (t in s, x, y in m), n = ``duration`` x ``rate_hz`` + 1.
+        """
+        n = int(duration * rate_hz) + 1
+        scripted = self if guides is None else dataclasses.replace(
+            self, guide_points=np.asarray(guides, dtype=float)
+        )
+        path = scripted.reference_path(start, rng, jitter=jitter, n_samples=n)
+        s = path[:, 0]
+        noise = rng.normal(scale=tremor, size=(n, 2))
+        kernel = np.hanning(9) / np.hanning(9).sum()
+        noise = np.column_stack([np.convolve(noise[:, i], kernel, mode="same") for i in (0, 1)])
+        xy = path[:, 1:] + noise * np.sin(np.pi * s)[:, None] + np.outer(s**3, end_shift)
+        return np.column_stack([s * duration, xy])
+
 
 def load_layout(path=None) -> MazeLayout:
     """Read a maze layout from JSON (default: the bundled ``assets/maze.json``)."""

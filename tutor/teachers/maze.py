@@ -18,8 +18,6 @@ a slip cuts an obstacle's corner (an incorrect demo).
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from ..errors import InvalidParameterError
@@ -53,19 +51,13 @@ class MazeTeacher:
         """A recorded demonstration from ``start``: (t in s, x, y in m) at 80 Hz."""
         lay = self.task.layout
         duration = rng.uniform(2.0, 3.5)
-        n = int(duration * RATE_HZ) + 1
         guides = lay.guide_points.copy()
         if slip:
             k = int(rng.choice(list(SLIP_SHIFTS)))
             guides[k] += np.asarray(SLIP_SHIFTS[k]) * rng.uniform(0.9, 1.1)
-        scripted = dataclasses.replace(lay, guide_points=guides)
-        path = scripted.reference_path(start, rng, jitter=self.traits.motor_noise, n_samples=n)
-        s = path[:, 0]
-        tremor = rng.normal(scale=self.traits.motor_noise / 2, size=(n, 2))
-        kernel = np.hanning(9) / np.hanning(9).sum()
-        tremor = np.column_stack([np.convolve(tremor[:, i], kernel, mode="same") for i in (0, 1)])
-        xy = path[:, 1:] + tremor * np.sin(np.pi * s)[:, None]
-        return np.column_stack([s * duration, xy])
+        return lay.hand_stroke(start, rng, duration, jitter=self.traits.motor_noise,
+                               tremor=self.traits.motor_noise / 2, guides=guides,
+                               rate_hz=RATE_HZ)
 
     def teach(self, condition: str, rng, **adaptive) -> MazeRun:
         """Teach one run under ``condition``; returns the finished run.
