@@ -41,6 +41,27 @@ def _number(v) -> str:
     return repr(round(float(v), 4)) if isinstance(v, float) else repr(v)
 
 
+def _flat(value) -> bool:
+    """Whether ``value`` is written on one line: numbers, strings, and lists or dicts of
+    those (a box, a point, a list of points), as the file was written by hand."""
+    if isinstance(value, dict):
+        return all(_flat(v) and not isinstance(v, dict) for v in value.values())
+    if isinstance(value, list):
+        return all(_flat(v) and not isinstance(v, dict) for v in value)
+    return True
+
+
+def _compact_json(value, indent: str = "") -> str:
+    if _flat(value):
+        return json.dumps(value)
+    inner = indent + "  "
+    if isinstance(value, list):
+        items = [inner + _compact_json(v, inner) for v in value]
+        return "[\n" + ",\n".join(items) + "\n" + indent + "]"
+    items = [f"{inner}{json.dumps(k)}: {_compact_json(v, inner)}" for k, v in value.items()]
+    return "{\n" + ",\n".join(items) + "\n" + indent + "}"
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folder", help="a folder lfd-tutor calibrate --out wrote")
@@ -58,10 +79,7 @@ def main(argv=None) -> None:
         entry["x"] = [round(box.x0, 6), round(box.x1, 6)]
         entry["y"] = [round(box.y0, 6), round(box.y1, 6)]
     data["guide_points"] = [[round(float(v), 6) for v in p] for p in layout.guide_points]
-    text = json.dumps(data, indent=2)
-    # keep the file's one-line boxes and points, as written by hand before
-    text = re.sub(r"\[\s+([-\d.e]+),\s+([-\d.e]+)\s+\]", r"[\1, \2]", text)
-    maze_path.write_text(text + "\n", encoding="utf-8")
+    maze_path.write_text(_compact_json(data) + "\n", encoding="utf-8")
 
     # the population: the fields the calibration changed
     traits_path = ROOT / "tutor" / "teachers" / "traits.py"
