@@ -132,6 +132,8 @@ def test_summary_statistics_scale_counts_to_the_papers_groups():
 def test_a_bad_budget_is_named():
     with pytest.raises(InvalidParameterError, match="population_size"):
         calibration.calibrate(calibration.Budget(population_size=1))
+    with pytest.raises(InvalidParameterError, match="max_simulations"):
+        calibration.calibrate(calibration.Budget(max_simulations=0))
 
 
 def test_the_calibrate_command_runs_end_to_end_on_the_quick_budget(tmp_path, capsys):
@@ -185,12 +187,22 @@ def test_the_calibrate_command_runs_end_to_end_on_the_quick_budget(tmp_path, cap
 
     plt.close(fig)
 
+    # a stopped run is finished from its history: the same last generation
+    again = calibration.from_history(out, calibration.QUICK_BUDGET)
+    pd.testing.assert_frame_equal(again.particles, found.particles[again.particles.columns],
+                                  check_exact=False, rtol=1e-9)
+    assert again.generations.simulations.sum() == found.generations.simulations.sum()
+    # generation 0 counts pyabc's first sample of the prior too
+    assert generations.simulations.iloc[0] >= 2 * calibration.QUICK_BUDGET.population_size
+
 
 def test_a_folder_without_a_calibration_is_refused_by_name(tmp_path):
     from tutor.errors import InvalidFileError
 
     with pytest.raises(InvalidFileError, match="lfd-tutor calibrate --out"):
         calibration.load(tmp_path)
+    with pytest.raises(InvalidFileError, match="no calibration history"):
+        calibration.from_history(tmp_path)
     (tmp_path / "calibration_summary.json").write_text("{not json", encoding="utf-8")
     with pytest.raises(InvalidFileError, match="calibrate"):
         calibration.load(tmp_path)

@@ -183,6 +183,15 @@ def _parser() -> argparse.ArgumentParser:
         help="posterior draws of the predictive check (default 20)",
     )
     cal.add_argument(
+        "--max-simulations", type=_whole_number(2, 100_000, " studies"), default=None,
+        help="start no further generation after this many simulated studies (default 720)",
+    )
+    cal.add_argument(
+        "--from-history", action="store_true",
+        help="finish a stopped run from the history in --out (its last whole generation; "
+        "give the budget and seed it was started with)",
+    )
+    cal.add_argument(
         "--seed", type=_whole_number(0, MAX_SEED), default=0, help="random seed (default 0)"
     )
     cal.add_argument(
@@ -313,14 +322,18 @@ def calibrate_command(args) -> None:
     budget = calibration.QUICK_BUDGET if args.quick else calibration.FULL_BUDGET
     chosen = {
         k: v for k, v in (("population_size", args.population_size),
-                          ("generations", args.generations), ("draws", args.draws))
+                          ("generations", args.generations), ("draws", args.draws),
+                          ("max_simulations", args.max_simulations))
         if v is not None
     }
     budget = dataclasses.replace(budget, **chosen)
     out = check_out_dir(args.out)  # before any work
-    found = calibration.calibrate(
-        budget, seed=args.seed, workers=args.workers, scheduler=args.scheduler, folder=out
-    )
+    if args.from_history:
+        found = calibration.from_history(out, budget, seed=args.seed, where="(stopped run)")
+    else:
+        found = calibration.calibrate(
+            budget, seed=args.seed, workers=args.workers, scheduler=args.scheduler, folder=out
+        )
     found = calibration.refine(
         found, seed=args.seed + 2, workers=args.workers, scheduler=args.scheduler,
         candidates=2 if args.quick else 6, seeds=2 if args.quick else 3,

@@ -55,7 +55,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -65,7 +64,7 @@ import pandas as pd
 
 from .. import paper
 from ..engine import Engine
-from ..errors import InvalidParameterError
+from ..errors import InvalidFileError, InvalidParameterError
 from ..fileio import atomic_write_text
 from ..tasks.maze import load_layout
 from ..teachers.traits import DEFAULT_POPULATION, Population
@@ -81,6 +80,7 @@ __all__ = [
     "QUICK_BUDGET",
     "FULL_BUDGET",
     "Calibration",
+    "from_history",
     "apply",
     "summary_statistics",
     "simulate",
@@ -412,6 +412,11 @@ class Budget:
         Posterior draws of the predictive check.
     quick : bool
         The test switch: smaller cohorts in the predictive check too; not a result.
+    max_simulations : int
+        ABC-SMC starts no further generation once this many studies are simulated
+        (pyabc's ``max_total_nr_simulations``: the generation under way finishes). Later
+        generations reject more draws, so this keeps the default run near 90 minutes on
+        2 cores (about 7 s per study on the pool of 2).
     """
 
     population_size: int = 60
@@ -420,6 +425,7 @@ class Budget:
     n2: int = 9
     draws: int = 20
     quick: bool = False
+    max_simulations: int = 720
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -466,7 +472,9 @@ class Calibration:
     particles : DataFrame
         The last generation's parameter sets (one column per parameter) and ``weight``.
     generations : DataFrame
-        Per generation: ``epsilon`` (the tolerance), ``particles``, ``simulations``.
+        Per generation: ``epsilon`` (the tolerance), ``particles``, ``simulations``
+        (generation 0's count includes pyabc's first sample of the prior, which sets
+        its tolerance, so the column sums to every study simulated).
     budget : Budget
     seconds : float
         Wall time of the ABC-SMC.
@@ -516,12 +524,13 @@ class Calibration:
 def _check_budget(budget) -> Budget:
     if not isinstance(budget, Budget):
         raise InvalidParameterError(f"budget must be a Budget, got {budget!r}")
-    lows = {"population_size": 2, "generations": 1, "n1": 3, "n2": 2, "draws": 2}
+    lows = {"population_size": 2, "generations": 1, "n1": 3, "n2": 2, "draws": 2,
+            "max_simulations": 2}
     for name, low in lows.items():
         v = getattr(budget, name)
-        if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= 10_000:
+        if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= 100_000:
             raise InvalidParameterError(
-                f"the budget's {name} must be a whole number from {low} to 10000, got {v!r}"
+                f"the budget's {name} must be a whole number from {low} to 100000, got {v!r}"
             )
     return budget
 
@@ -567,25 +576,60 @@ def calibrate(budget: Budget = FULL_BUDGET, seed: int = 0, workers=None, schedul
         with tempfile.TemporaryDirectory() as tmp:
             where_db = Path(folder or tmp)
             where_db.mkdir(parents=True, exist_ok=True)
-            db = where_db / "calibration_history.db"
+            db = where_db / HISTORY
             db.unlink(missing_ok=True)
-            started = time.perf_counter()
             abc.new(f"sqlite:///{db}", observed)
-            history = abc.run(max_nr_populations=budget.generations)
-            seconds = time.perf_counter() - started
-            frame, weights = history.get_distribution()
-            distances = history.get_weighted_distances()["distance"].to_numpy()
-            pops = history.get_all_populations()
-        where = engine.where
+            abc.run(max_nr_populations=budget.generations,
+                    max_total_nr_simulations=budget.max_simulations)
+            return from_history(where_db, budget, seed, engine.where)
+
+
+#: pyabc's history of a calibration (an SQLite file of numbers), in its out folder
+HISTORY = "calibration_history.db"
+
+
+def from_history(folder, budget: Budget = FULL_BUDGET, seed: int = 0,
+                 where: str = "") -> Calibration:
+    """The calibration in pyabc's history in ``folder``, as of its last whole generation.
+
+    :func:`calibrate` ends here; so can a run that was stopped (a kill, a crash, a
+    machine needed back): ``lfd-tutor calibrate --from-history`` finishes it from its
+    last generation (``budget`` and ``seed`` as the run was started with).
+
+    Raises
+    ------
+    InvalidFileError
+        No history in the folder, or one without a whole generation.
+    """
+    import pyabc
+
+    db = Path(folder) / HISTORY
+    if not db.is_file():
+        raise InvalidFileError(
+            f"{db}: no calibration history here; `lfd-tutor calibrate --out {folder}` "
+            "writes one"
+        )
+    history = pyabc.History(f"sqlite:///{db}", _id=1)
+    pops = history.get_all_populations()
+    if history.max_t < 0:
+        raise InvalidFileError(
+            f"{db}: the calibration stopped before its first generation; start it again"
+        )
+    names = list(PARAMETERS)
+    frame, weights = history.get_distribution()
+    distances = history.get_weighted_distances()["distance"].to_numpy()
     particles = pd.DataFrame({
         n: [PARAMETERS[n].from_unit(min(max(float(u), 0.0), 1.0)) for u in frame[n]]
         for n in names
     })
     particles["weight"] = np.asarray(weights, dtype=float)
     particles["distance"] = np.asarray(distances, dtype=float)
-    gens = pops[pops.t >= 0][["t", "epsilon", "particles", "samples"]].rename(
+    done = pops[pops.t <= history.max_t]
+    gens = done[done.t >= 0][["t", "epsilon", "particles", "samples"]].rename(
         columns={"t": "generation", "samples": "simulations"}
     ).reset_index(drop=True)
+    gens.loc[0, "simulations"] += int(done[done.t < 0].samples.sum())  # the calibration sample
+    seconds = float(done.wall_time.sum())
     return Calibration(particles, gens, budget, seconds, int(seed), where)
 
 
