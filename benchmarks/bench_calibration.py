@@ -72,10 +72,10 @@ def main(argv=None) -> None:
     parser.add_argument("--calibration", default=None,
                         help="time the point this calibration folder chose (default: the "
                         "prior's middle)")
-    parser.add_argument("--studies", type=int, default=600,
-                        help="simulated studies of the budget to cost (default 600: 60 "
-                        "particles x 5 generations at about 50 %% acceptance, plus the "
-                        "calibration sample)")
+    parser.add_argument("--studies", type=int, default=751,
+                        help="simulated studies of the budget to cost (default 751: what "
+                        "the default 60 particles x 3 generations simulated on 2026-12-06, "
+                        "pyabc's first prior sample included)")
     parser.add_argument("--out", default=DEFAULT_OUT)
     args = parser.parse_args(argv)
     res = run(args.repeats, args.workers, args.calibration)

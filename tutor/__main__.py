@@ -176,7 +176,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     cal.add_argument(
         "--generations", type=_whole_number(1, 100, " generations"), default=None,
-        help="ABC-SMC generations (default 5)",
+        help="ABC-SMC generations (default 3)",
     )
     cal.add_argument(
         "--draws", type=_whole_number(2, 10_000, " draws"), default=None,
@@ -329,7 +329,9 @@ def calibrate_command(args) -> None:
     budget = dataclasses.replace(budget, **chosen)
     out = check_out_dir(args.out)  # before any work
     if args.from_history:
-        found = calibration.from_history(out, budget, seed=args.seed, where="(stopped run)")
+        found = calibration.from_history(
+            out, budget, seed=args.seed, where="a stopped run, finished from its history"
+        )
     else:
         found = calibration.calibrate(
             budget, seed=args.seed, workers=args.workers, scheduler=args.scheduler, folder=out
