@@ -69,10 +69,10 @@ def main(argv=None) -> None:
     folder = Path(args.folder)
     found, _, _ = calibration.load(folder)
     point = {k: round(v, 4) for k, v in found.bundled().items()}
-    population, settings = calibration.apply(point)
+    population, _ = calibration.apply(point)
 
     # the maze: blocks (to the millimetre) and guide points of the calibrated geometry
-    layout = load_layout().with_blocks(*(round(v, 3) for v in settings.maze_blocks))
+    layout = load_layout().with_blocks(*calibration.bundled_blocks(point))
     maze_path = ROOT / "tutor" / "assets" / "maze.json"
     data = json.loads(maze_path.read_text(encoding="utf-8"))
     for entry, box in zip(data["obstacles"], layout.obstacles, strict=True):

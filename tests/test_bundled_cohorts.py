@@ -44,7 +44,7 @@ def test_bundled_cohorts_analyse_and_report():
     assert set(a2["conclusions"]) >= {"BF best"}
     for experiment in (1, 2):
         text = seeds_report(load_robustness(experiment), experiment)
-        assert "Over seeds 0-9 (10 cohorts" in text and "seeds where each conclusion holds" in text
+        assert "Over seeds 0-19 (20 cohorts" in text and "seeds where each conclusion holds" in text
 
 
 def test_a_missing_or_wrong_folder_says_which_command_writes_it(tmp_path):

@@ -18,13 +18,16 @@ from tutor.teachers.traits import DEFAULT_POPULATION
 
 
 def test_the_bundled_blocks_give_the_bundled_maze_back():
-    layout = load_layout()
-    assert layout.blocks == pytest.approx({"reach": 0.13, "low": 0.10, "height": 0.03,
-                                           "gap": 0.05})
+    layout = load_layout()  # the calibrated maze: blocks 15.5 cm in, 2.9 cm high
+    assert layout.blocks == pytest.approx({"reach": 0.155, "low": 0.091, "height": 0.029,
+                                           "gap": 0.061})
+    def corners(lay):
+        return [v for b in lay.obstacles for v in (b.x0, b.x1, b.y0, b.y1)]
+
     same = layout.with_blocks(**layout.blocks)
-    assert same.obstacles == layout.obstacles
+    assert corners(same) == pytest.approx(corners(layout), abs=1e-12)
     np.testing.assert_allclose(same.guide_points, layout.guide_points, atol=1e-12)
-    assert layout.with_blocks().obstacles == layout.obstacles  # None: as now
+    assert corners(layout.with_blocks()) == pytest.approx(corners(layout), abs=1e-12)  # as now
 
 
 def test_new_blocks_move_both_blocks_and_a_careful_hand_still_passes():
@@ -54,8 +57,10 @@ def test_a_maze_no_hand_can_pass_is_named(blocks, match):
 def test_the_study_settings_build_the_maze_with_the_blocks():
     task = cohort_task("maze", StudySettings(maze_blocks=(0.145, None, None, None)))
     assert task.layout.blocks["reach"] == pytest.approx(0.145)
-    assert task.layout.blocks["low"] == pytest.approx(0.10)
-    assert cohort_task("maze", StudySettings()).layout.blocks["reach"] == pytest.approx(0.13)
+    assert task.layout.blocks["low"] == pytest.approx(load_layout().blocks["low"])
+    assert cohort_task("maze", StudySettings()).layout.blocks == pytest.approx(
+        load_layout().blocks
+    )
 
 
 @pytest.mark.parametrize("corner", range(8))
@@ -159,7 +164,10 @@ def test_the_calibrate_command_runs_end_to_end_on_the_quick_budget(tmp_path, cap
     # refine chose the bundled point among the last generation's closest particles
     refined = pd.read_csv(out / "calibration_refined.csv")
     assert len(refined) == 2 and set(calibration.PARAMETERS) <= set(refined.columns)
-    best = refined.loc[refined.mean_distance.idxmin()]
+    assert refined.chosen.sum() == 1
+    best = refined[refined.chosen].iloc[0]
+    steady = refined[refined.steady_as_bundled] if refined.steady_as_bundled.any() else refined
+    assert best.mean_distance == steady.mean_distance.min()  # the closest steady maze
     assert summary["chosen"] == pytest.approx({n: best[n] for n in calibration.PARAMETERS})
     assert set(refined.abc_distance) <= set(posterior.distance)
     at_point = pd.read_csv(out / "calibration_point_predictive.csv")
@@ -240,3 +248,23 @@ def test_the_posterior_quantiles_follow_the_particles_weights():
     assert found.quantile(name, 0.05) == pytest.approx(rows[0][name])
     assert found.point()[name] == found.quantile(name, 0.5) == pytest.approx(rows[2][name])
     assert found.quantile(name, 0.99) == pytest.approx(rows[2][name])
+
+
+def test_the_bundled_population_and_maze_are_the_bundled_calibration():
+    """scripts/apply_calibration.py wrote the bundled calibration's point into the
+    defaults: Population's fields (to 4 decimals) and the maze's blocks (to the mm)."""
+    import dataclasses
+
+    found, _, table = calibration.load()  # tutor/assets/calibration
+    assert not found.budget.quick and found.chosen is not None
+    point = {k: round(v, 4) for k, v in found.bundled().items()}
+    population, _ = calibration.apply(point)
+    for f in dataclasses.fields(population):
+        want, have = getattr(population, f.name), getattr(DEFAULT_POPULATION, f.name)
+        assert have == pytest.approx(want, abs=1e-4), f.name
+    bundled = load_layout()
+    expected = bundled.with_blocks(*calibration.bundled_blocks(point))
+    for a, b in zip(bundled.obstacles, expected.obstacles, strict=True):
+        assert (a.x0, a.x1, a.y0, a.y1) == pytest.approx((b.x0, b.x1, b.y0, b.y1), abs=1e-6)
+    np.testing.assert_allclose(bundled.guide_points, expected.guide_points, atol=1e-6)
+    assert list(table.statistic) == list(calibration.STATISTICS)

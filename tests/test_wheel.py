@@ -49,6 +49,9 @@ _PACKAGE_DATA = (
     "tutor/assets/maze.json",
     "tutor/assets/pickplace.json",
     "tutor/assets/feasibility_map.npz",
+    "tutor/assets/calibration/calibration_summary.json",
+    "tutor/assets/calibration/calibration_report.txt",
+    "tutor/assets/calibration/calibration_posterior.csv",
     "tutor/views/static/sketchpad.js",
 )
 

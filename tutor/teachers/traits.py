@@ -14,9 +14,14 @@ No trait depends on the condition. A condition changes only what the teacher see
 (r) and what that costs in time, so every difference between conditions in a
 simulated cohort comes from the information shown and the clock.
 
-The paper does not measure any of these traits; the values below are our judgement
-of novices (chosen once for the whole population and never per condition), written
-down so an educator can change them and see what follows.
+The paper does not measure any of these traits. The defaults of :class:`Population`
+that the paper's numbers constrain (the maze and tray priors and scatters, the least
+precise aim, the lowest satisfaction, the repeat and slip rates, the set-up time and
+heed) are the point of the bundled calibration (``lfd-tutor calibrate``,
+:mod:`tutor.study.calibration`; its report is ``tutor/assets/calibration``), written
+here by ``scripts/apply_calibration.py``; the others are our judgement of novices.
+Either way they are chosen once for the whole population and never per condition, and
+written down so an educator can change them and see what follows.
 """
 
 from __future__ import annotations
@@ -145,7 +150,10 @@ class Population:
     """How novice teachers differ from one another: the distributions traits come from.
 
     Every field is documented with the distribution it parametrises; change a value
-    here to simulate a different population (e.g. more careful teachers).
+    here to simulate a different population (e.g. more careful teachers). The values
+    the notes below reason about are the hand-set ones that came before the
+    calibration; the notes still say what each field means and what the paper says
+    about it, and the calibration's priors are in :mod:`tutor.study.calibration`.
 
     Attributes
     ----------
@@ -238,38 +246,38 @@ class Population:
         existed. A free parameter of the calibration (:mod:`tutor.study.calibration`).
     """
 
-    enough_median_maze: float = 4.0
-    enough_median_pickplace: float = 7.0
+    enough_median_maze: float = 2.8887
+    enough_median_pickplace: float = 5.2197
     enough_sigma: float = 0.45
     enough_range: tuple[int, int] = (2, 12)
     focus_sd: float = 0.2
-    spread_median_maze: float = 0.22
-    spread_median_pickplace: float = 0.5
+    spread_median_maze: float = 0.3066
+    spread_median_pickplace: float = 0.3086
     spread_sigma: float = 0.5
     plan_choices_maze: int = 1
     plan_choices_pickplace: int = 2
     aim_low: float = 0.02
-    aim_high: float = 0.06
+    aim_high: float = 0.0694
     motor_low: float = 0.002
     motor_high: float = 0.005
-    slip_a: float = 1.5
-    slip_b: float = 48.0
-    satisfaction_low: float = 0.93
+    slip_a: float = 2.32
+    slip_b: float = 47.68
+    satisfaction_low: float = 0.8037
     satisfaction_high: float = 1.0
     patience_low: int = 12
     patience_high: int = 20
-    setup_low: float = 50.0
-    setup_high: float = 100.0
+    setup_low: float = 13.0062
+    setup_high: float = 63.0062
     test_low: float = 0.3
     test_high: float = 0.8
     notice_low: float = 0.7
     notice_high: float = 1.0
-    repeat_a: float = 1.5
-    repeat_b: float = 8.5
+    repeat_a: float = 2.28
+    repeat_b: float = 7.72
     compliance_low: float = 0.4
     compliance_high: float = 1.0
-    heed_low: float = 1.0
-    heed_high: float = 1.0
+    heed_low: float = 0.0
+    heed_high: float = 0.4205
 
     def __post_init__(self):
         lo, hi = self.enough_range
