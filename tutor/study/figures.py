@@ -363,7 +363,7 @@ def calibration_figure(table: pd.DataFrame):
         ax.plot([], [], color="grey", lw=1, label="the posterior's 90 % interval")
     ax.plot([], [], "x", color="black", label="paper's value outside the interval")
     inside = rows[~rows.fitted.astype(bool)][main + "inside"].astype(bool)
-    ax.set_title(f"Calibration check ({who}): the paper's value inside the interval for "
+    ax.set_title(f"Calibration check ({who}):\nthe paper's value inside the interval for "
                  f"{int(inside.sum())} of {len(inside)} held-out statistics")
     _legend_below(ax, 2, drop=0.12)
     return fig
