@@ -6,7 +6,8 @@ the condition changes only what they are shown after each demo:
 NF  nothing (r empty): the teacher follows their own plan and stops when their prior
     says the robot has had enough demos.
 VF  the whole picture R^ (green/red): they aim at the densest red region, with human
-    imprecision, and stop when the picture looks green enough to them.
+    imprecision, as often as they heed the picture (``heed``; otherwise their own plan),
+    and stop when the picture looks green enough to them.
 VR  the same picture and the paper's three rules (:mod:`tutor.tasks.maze_rules`):
     they start each demo inside the rule's 4 cm circle, aiming at red inside it.
 
