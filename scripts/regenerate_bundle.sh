@@ -27,5 +27,8 @@ done
 if [[ "${1:-}" != "--no-adaptive" ]]; then
     step "the adaptive study (10 seeds)"
     lfd-tutor adaptive --seeds 10 --out tutor/assets/adaptive --no-progress
+    # bundled as tutor/assets/README.md says: the runs gzipped, the per-demo curves left out
+    gzip -9 -n -f tutor/assets/adaptive/adaptive_runs.csv
+    rm -f tutor/assets/adaptive/adaptive_curves.csv
 fi
 step "done: run the tests (bash scripts/test.sh) and update the prose from the new reports"
