@@ -204,8 +204,10 @@ def test_compliance_is_a_population_trait_drawn_last():
     assert dataclasses.replace(fixed, compliance=traits.compliance) == traits
     rng = Recording(3)
     assert DEFAULT_POPULATION.sample(rng) == traits  # the same draws, noted
-    assert rng.calls[-1] == ("uniform", (0.4, 1.0))  # compliance: the last draw
-    assert [c for c in rng.calls[:-1] if c == ("uniform", (0.4, 1.0))] == []
+    heed = (DEFAULT_POPULATION.heed_low, DEFAULT_POPULATION.heed_high)
+    assert rng.calls[-1] == ("uniform", heed)  # heed, added after it, is drawn after it
+    assert rng.calls[-2] == ("uniform", (0.4, 1.0))  # compliance: the last draw before
+    assert [c for c in rng.calls[:-2] if c == ("uniform", (0.4, 1.0))] == []
     with pytest.raises(InvalidParameterError, match="compliance_low"):
         Population(compliance_low=0.9, compliance_high=0.5)
     assert "compliance" in traits.to_dict()
