@@ -197,6 +197,7 @@ class PickPlaceTask(Task):
         self.feasibility = self._feasibility(feasibility)
         self.start = start_position(self.scene)
         self._times = np.linspace(0.0, 1.0, self.scene.n_samples)
+        self._frame_rows: dict[bytes, tuple[Frame, ...]] = {}
         self._test_points = self.scene.plant_positions
         self._batch = self.frame_batch(self._test_points)
 
@@ -230,13 +231,22 @@ class PickPlaceTask(Task):
         return self._times
 
     def frames(self, point) -> list[Frame]:
-        eye = np.eye(4)
-        pad = [0.0]
-        return [
-            Frame(eye, np.r_[self.start, pad]),
-            Frame(eye, np.r_[np.asarray(point, float), pad]),
-            Frame(eye, np.r_[self.scene.release_point, pad]),
-        ]
+        point = np.asarray(point, float)
+        key = point.tobytes()
+        row = self._frame_rows.get(key)
+        # frames are immutable, so each plant's are made once: a refit needs every demo's,
+        # and checking a frame takes a singular value decomposition
+        if row is None:
+            eye = np.eye(4)
+            pad = [0.0]
+            row = (
+                Frame(eye, np.r_[self.start, pad]),
+                Frame(eye, np.r_[point, pad]),
+                Frame(eye, np.r_[self.scene.release_point, pad]),
+            )
+            if len(self._frame_rows) < 1024:
+                self._frame_rows[key] = row
+        return list(row)
 
     def frame_batch(self, points) -> FrameBatch:
         if points is getattr(self, "_test_points", None) and hasattr(self, "_batch"):
