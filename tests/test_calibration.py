@@ -203,6 +203,17 @@ def test_the_calibrate_command_runs_end_to_end_on_the_quick_budget(tmp_path, cap
     # generation 0 counts pyabc's first sample of the prior too
     assert generations.simulations.iloc[0] >= 2 * calibration.QUICK_BUDGET.population_size
 
+    # --recheck runs the two checks again and keeps the posterior and the chosen point
+    assert main(["calibrate", "--recheck", "--quick", "--out", str(out)]) == 2
+    assert "InvalidParameterError" in capsys.readouterr().err  # named, no traceback
+    assert main(["calibrate", "--recheck", "--workers", "1", "--out", str(out)]) == 0
+    assert "predictive checks rerun" in capsys.readouterr().out
+    rechecked, predicted_again, table_again = calibration.load(out)
+    pd.testing.assert_frame_equal(rechecked.particles, found.particles)
+    assert rechecked.bundled() == found.bundled()
+    pd.testing.assert_frame_equal(predicted_again, predicted)  # same seeds, same code
+    assert list(table_again.statistic) == list(calibration.STATISTICS)
+
 
 def test_a_folder_without_a_calibration_is_refused_by_name(tmp_path):
     from tutor.errors import InvalidFileError

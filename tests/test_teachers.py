@@ -294,6 +294,27 @@ def test_cohort_teacher_keeps_its_traits_in_every_run(experiment, runs):
     assert not tables[0].iloc[0].equals(tables[1].iloc[0])
 
 
+def test_experiment2_counts_ambiguous_demos_as_the_paper_did():
+    """The paper's failure table for Experiment 2 found ambiguous demos by the efficacy
+    change alone (delta_l <= eps_m - eps_{m-1} <= delta_u): every correct demo after the
+    first whose change lies in the band counts, however far from the earlier ones; the
+    maze keeps the task's similarity test."""
+    from tutor.framework.failures import Thresholds
+    from tutor.study.cohort import StudySettings, simulate_teacher
+
+    assert StudySettings().ambiguity("pickplace") == np.inf
+    assert StudySettings().ambiguity("maze") is None
+    assert StudySettings(pickplace_ambiguity=0.03).ambiguity("pickplace") == 0.03
+    thr = Thresholds()
+    demos = pd.DataFrame([d for k in range(4) for d in simulate_teacher(2, k, 3, 8)[1]])
+    band = demos.delta.between(thr.delta_lower, thr.delta_upper)
+    expected = demos.correct & (demos.demo > 1) & band
+    assert (demos.ambiguous == expected).all()
+    assert expected.any() and not demos[demos.demo == 1].ambiguous.any()
+    far = demos.ambiguous & (demos.similarity > 0.03)  # the old 3 cm test would miss them
+    assert far.any()
+
+
 def test_maze_slip_makes_an_incorrect_demo(maze_task):
     t = MazeTeacher(traits(), maze_task)
     rng = np.random.default_rng(2)

@@ -192,6 +192,11 @@ def _parser() -> argparse.ArgumentParser:
         "give the budget and seed it was started with)",
     )
     cal.add_argument(
+        "--recheck", action="store_true",
+        help="run only the predictive checks and the report again for the calibration in "
+        "--out (its posterior and bundled point kept; give the seed it was run with)",
+    )
+    cal.add_argument(
         "--seed", type=_whole_number(0, MAX_SEED), default=0, help="random seed (default 0)"
     )
     cal.add_argument(
@@ -316,6 +321,7 @@ def calibrate_command(args) -> None:
     """``lfd-tutor calibrate``: ABC-SMC, the predictive check, the report and the files."""
     import dataclasses
 
+    from .errors import InvalidParameterError
     from .study import calibration
     from .study.report import check_out_dir
 
@@ -328,6 +334,18 @@ def calibrate_command(args) -> None:
     }
     budget = dataclasses.replace(budget, **chosen)
     out = check_out_dir(args.out)  # before any work
+    if args.recheck:
+        if args.from_history or chosen or args.quick:
+            raise InvalidParameterError(
+                "--recheck reruns the checks of the calibration in --out with its own "
+                "budget: drop --from-history, --quick and the budget options"
+            )
+        found, table, paths = calibration.recheck(
+            out, seed=args.seed, workers=args.workers, scheduler=args.scheduler
+        )
+        print(calibration.format_report(found, table))
+        print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
+        return
     if args.from_history:
         found = calibration.from_history(
             out, budget, seed=args.seed, where="a stopped run, finished from its history"

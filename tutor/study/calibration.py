@@ -725,6 +725,27 @@ def predictive(calibration: Calibration, seed: int = 1, workers=None,
     return pd.DataFrame(rows)
 
 
+def recheck(folder, seed: int = 0, workers=None, scheduler=None):
+    """The predictive checks of the calibration saved in ``folder`` run again with the
+    code as it is now (its posterior, refine table and bundled point kept), e.g. after a
+    change in how a statistic is counted; writes the files back into ``folder``.
+
+    Returns ``(calibration, table, paths)``; the fresh seeds are those of the run that
+    wrote the folder with ``seed`` (:func:`predictive` with ``seed + 1``).
+    """
+    found, _, _ = load(folder)
+    note = "; predictive checks rerun (lfd-tutor calibrate --recheck)"
+    if not found.where.endswith(note):
+        found = dataclasses.replace(found, where=found.where + note)
+    predicted, at_point = (
+        predictive(found, seed=seed + 1, workers=workers, scheduler=scheduler, at_point=point)
+        for point in (False, True)
+    )
+    table = report(found, predicted, point_predicted=at_point)
+    paths = save(found, predicted, table, folder, point_predicted=at_point)
+    return found, table, paths
+
+
 def _intervals(predicted: pd.DataFrame | None, name: str, level: float):
     lo_q, hi_q = (1 - level) / 2, 1 - (1 - level) / 2
     if predicted is None or name not in predicted or predicted[name].dropna().empty:

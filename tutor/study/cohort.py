@@ -26,6 +26,7 @@ final demonstration set (see :func:`run_rows`).
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from contextlib import nullcontext
@@ -108,11 +109,16 @@ class StudySettings:
     ----------
     target : float
         Experiment 1's coverage for the score (the paper's 90 %).
-    pickplace_ambiguity : float
-        delta_a (m) for counting ambiguous pick-and-place demos. The task's default
-        (1 cm) never fires with the tutor's kinesthetic demos: two demos *of the same
-        plant* are 1.5-2.6 cm apart on average (timing varies), neighbouring plants
-        about 3 cm. 3 cm counts a demo at the same or the next plant as "similar".
+    pickplace_ambiguity : float or None
+        delta_a (m) for counting ambiguous pick-and-place demos; None (the default):
+        no similarity test, the efficacy change alone, as the paper counted its failure
+        table for Experiment 2 ("ambiguous demonstrations are found by considering the
+        learner's efficacy as defined by" delta_l <= eps_m - eps_{m-1} <= delta_u). A
+        first demo is never ambiguous: there is nothing for it to repeat. Until
+        2026-12-07 the cohorts used 3 cm (a demo at the same or the next plant; the
+        task's own 1 cm never fires with the kinesthetic demos, two demos of one plant
+        being 1.5-2.6 cm apart): 1-15 ambiguous demos per condition in the seed-0
+        cohort against the paper's 6-54, 10-78 with the paper's rule.
     pickplace_feasibility : bool
         Whether criterion (i) also checks the arm (the task's ``feasibility="map"``),
         as the paper's B requires. Off: the cohort judges table, tray, grab and
@@ -126,14 +132,16 @@ class StudySettings:
     """
 
     target: float = 0.9
-    pickplace_ambiguity: float = 0.03
+    pickplace_ambiguity: float | None = None
     pickplace_feasibility: bool = True
     maze_blocks: tuple | None = None
 
     def ambiguity(self, name: str) -> float | None:
-        """delta_a for task ``name``'s runs: pick-and-place's setting, else None (the
-        task's own)."""
-        return {"pickplace": self.pickplace_ambiguity}.get(name)
+        """delta_a for task ``name``'s runs: pick-and-place's setting (inf: no
+        similarity test), else None (the task's own)."""
+        if name != "pickplace":
+            return None
+        return math.inf if self.pickplace_ambiguity is None else self.pickplace_ambiguity
 
     def task_options(self, name: str) -> dict:
         """The options a cohort builds task ``name`` with (:func:`tutor.tasks.make_task`)."""
@@ -236,7 +244,8 @@ def run_rows(run, base: dict, ambiguity: float | None, target: float):
     criteria themselves (b not in B); *undemonstrated* is |B^ minus (R^ or b)| after the
     last demo; *ambiguous* counts demos with s(b, b_set) <= delta_a and
     delta_l <= eps_m - eps_{m-1} <= delta_u (re-checked here with ``ambiguity`` as
-    delta_a, or the task's own when None).
+    delta_a, the task's own when None, no similarity test when inf); a first demo is
+    never ambiguous.
     """
     session, attempt = run.session, run.attempt
     history = session.history
@@ -252,7 +261,9 @@ def run_rows(run, base: dict, ambiguity: float | None, target: float):
                 "delta": rec.delta,
                 "similarity": None if np.isinf(rec.similarity) else rec.similarity,
                 "correct": rec.demo_passed,
+                # a first demo (no earlier one: similarity inf) repeats nothing
                 "ambiguous": rec.demo_passed
+                and np.isfinite(rec.similarity)
                 and is_ambiguous(rec.similarity, rec.delta, delta_a, thr),
                 "chosen_by": demo.chosen_by,
             }
