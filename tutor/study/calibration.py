@@ -160,18 +160,16 @@ def _gap_share(population, settings, value):
     return population, dataclasses.replace(settings, maze_blocks=tuple(now))
 
 
-def _satisfaction(population, settings, value):
-    return dataclasses.replace(population, satisfaction_low=float(value)), settings
+def _uniform_around(low: str, high: str, width: float, floor: float = 0.0,
+                    ceiling: float = math.inf):
+    """A uniform of fixed ``width`` around the value (its middle), clipped to
+    ``floor`` .. ``ceiling``: the population's ``low`` and ``high`` fields."""
+    def put(population, settings, value):
+        value = float(value)
+        lo, hi = max(floor, value - width / 2), min(ceiling, value + width / 2)
+        return dataclasses.replace(population, **{low: lo, high: hi}), settings
 
-
-def _setup(population, settings, value):  # a 50 s wide uniform around the middle
-    low = max(0.0, float(value) - 25.0)
-    return dataclasses.replace(population, setup_low=low, setup_high=float(value) + 25.0), settings
-
-
-def _heed(population, settings, value):  # a 0.5 wide uniform around the middle, in 0-1
-    low, high = max(0.0, float(value) - 0.25), min(1.0, float(value) + 0.25)
-    return dataclasses.replace(population, heed_low=low, heed_high=high), settings
+    return put
 
 
 def _beta_mean(a: str, b: str, concentration: float):
@@ -232,7 +230,7 @@ PARAMETERS: dict[str, Parameter] = {
             "satisfaction_low", 0.7, 0.97,
             "the lowest share of B^ a teacher must believe works before stopping (the "
             "highest is 1)",
-            _satisfaction,
+            _field("satisfaction_low"),
         ),
         Parameter(
             "aim_high", 0.04, 0.15,
@@ -267,14 +265,14 @@ PARAMETERS: dict[str, Parameter] = {
             "setup_middle", 30.0, 110.0,
             "seconds per pick-and-place demo besides the motion (uniform, 50 s wide, "
             "around this middle)",
-            _setup,
+            _uniform_around("setup_low", "setup_high", 50.0),
         ),
         Parameter(
             "heed_middle", 0.0, 1.0,
             "how often a teacher shown failures chooses the next demo from the picture "
             "rather than from their own plan (uniform, 0.5 wide around this middle, "
             "clipped to 0-1; the hand-set model's teachers always do)",
-            _heed,
+            _uniform_around("heed_low", "heed_high", 0.5, ceiling=1.0),
         ),
     )
 }
