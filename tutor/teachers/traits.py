@@ -240,10 +240,11 @@ class Population:
         the time and some prefer their own plan. The adaptive study sets it to 0.5 and
         1 instead (``dataclasses.replace``) to bracket the effect.
     heed_low, heed_high
-        ``heed`` ~ uniform (both 1 by default: every teacher reads the picture every
-        time). Drawn after ``compliance`` and only when the two differ, so a population
-        whose teachers all heed draws every other trait exactly as before the trait
-        existed. A free parameter of the calibration (:mod:`tutor.study.calibration`).
+        ``heed`` ~ uniform (the calibration's 0-0.42; both 1 would have every teacher
+        read the picture every time, as the hand-set teachers did). Drawn after
+        ``compliance`` and only when the two differ, so a population whose teachers all
+        heed draws every other trait exactly as before the trait existed. A free
+        parameter of the calibration (:mod:`tutor.study.calibration`).
     """
 
     enough_median_maze: float = 2.8887
