@@ -20,6 +20,7 @@ undemonstrated
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
@@ -127,9 +128,12 @@ def similarity(demo: np.ndarray, others) -> tuple[float, int]:
 
 
 def is_ambiguous(similarity: float, delta: float, ambiguity_distance: float, thresholds) -> bool:
-    """s(b, b_set) <= delta_a and delta_l <= eps_m - eps_{m-1} <= delta_u."""
+    """s(b, b_set) <= delta_a and delta_l <= eps_m - eps_{m-1} <= delta_u; a first demo
+    (no earlier one: ``similarity`` inf) repeats nothing, whatever delta_a (even inf, no
+    similarity test)."""
     return (
-        similarity <= ambiguity_distance
+        math.isfinite(similarity)
+        and similarity <= ambiguity_distance
         and thresholds.delta_lower <= delta <= thresholds.delta_upper
     )
 

@@ -261,9 +261,7 @@ def run_rows(run, base: dict, ambiguity: float | None, target: float):
                 "delta": rec.delta,
                 "similarity": None if np.isinf(rec.similarity) else rec.similarity,
                 "correct": rec.demo_passed,
-                # a first demo (no earlier one: similarity inf) repeats nothing
                 "ambiguous": rec.demo_passed
-                and np.isfinite(rec.similarity)
                 and is_ambiguous(rec.similarity, rec.delta, delta_a, thr),
                 "chosen_by": demo.chosen_by,
             }
