@@ -9,7 +9,7 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from tutor.engine import Engine, batches, check_scheduler
+from tutor.engine import MAX_BATCH, Engine, batches, check_scheduler
 from tutor.errors import InvalidParameterError
 
 
@@ -36,8 +36,13 @@ def test_batches_cover_every_job_once_in_order():
     for n, workers in ((1, 1), (7, 2), (100, 2), (3000, 8)):
         cuts = batches(n, workers)
         assert [i for cut in cuts for i in cut] == list(range(n))
-        assert len(cuts) <= 4 * workers
-    assert len(batches(3000, 2)[0]) == 375  # a large study sends hundreds of jobs a task
+        assert len(cuts) <= max(4 * workers, -(-n // MAX_BATCH))
+        assert max(len(cut) for cut in cuts) <= MAX_BATCH
+    # a cohort of 36 teachers on 2 workers: 8 batches of 4-5 (each worker takes 4)
+    assert [len(cut) for cut in batches(36, 2)] == [5] * 7 + [1]
+    # the adaptive study's 3744 teacher-arms: 234 batches of 16 (48 runs a task), not 8
+    # batches of 468 whose last one kept a worker busy long after the other was done
+    assert [len(cut) for cut in batches(3744, 2)] == [16] * 234
 
 
 @pytest.mark.parametrize(

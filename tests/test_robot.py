@@ -486,6 +486,31 @@ def test_map_lookup_shapes_and_outside(fmap):
         fmap.contains(pts, np.zeros(3))
 
 
+def test_map_contains_is_exactly_the_interpolation_s_sign(fmap):
+    """contains() skips the interpolation in cells whose eight corners agree: the same
+    answer as value() > 0 for every point, on the grid's borders, on X's border (the
+    mixed cells), off the grid and for either hand."""
+    rng = np.random.default_rng(7)
+    low, high = fmap.origin - 0.05, fmap.upper + 0.05
+    pts = rng.uniform(low, high, (40_000, 3))
+    # points on voxel centres and faces, where a weight is exactly 0 or 1
+    grid = fmap.grid_points().reshape(-1, 3)
+    pts = np.concatenate([pts, grid[rng.choice(len(grid), 5000)],
+                          grid[rng.choice(len(grid), 5000)] + [fmap.spacing / 2, 0, 0]])
+    grip = rng.uniform(0, 1, len(pts))
+    for g in (None, grip):
+        value = fmap.value(pts, g)
+        assert np.array_equal(fmap.contains(pts, g), value > 0)
+        mixed = np.abs(value) < fmap.spacing  # near X's border: cells whose corners differ
+        assert mixed.sum() > 1000
+    # a map whose margins change sign in every cell, and one of one sign
+    checker = np.indices((2, 5, 6, 7)).sum(axis=0) % 2 - 0.5
+    for margin in (checker, np.full((2, 5, 6, 7), 0.3), np.full((2, 5, 6, 7), -0.3)):
+        small = FeasibilityMap(margin, (0, 0, 0), 0.1)
+        pts = rng.uniform(-0.05, 0.7, (5000, 3))
+        assert np.array_equal(small.contains(pts, grip[:5000]), small.value(pts, grip[:5000]) > 0)
+
+
 def test_map_file_loads_without_pickle(fmap):
     with np.load(DEFAULT_MAP_PATH, allow_pickle=False) as z:
         for key in z.files:

@@ -11,11 +11,13 @@ map one function over many independent jobs (a teacher, a teacher-arm, a run fil
   ``"tcp://HOST:PORT"`` joins a running scheduler (e.g. one started by dask-jobqueue on
   a batch cluster, or by the Dask Helm chart on Kubernetes).
 
-Jobs are sent in batches (:func:`batches`: about four per worker, so a study of
-thousands of teacher-arms sends tens of jobs per task, not one), every batch runs on one
-BLAS thread (:func:`tutor.workers.one_blas_thread`), and results come back in the jobs'
-order. A job's result depends only on its arguments (each seeds its own generator), so
-a study gives the same numbers here, on the pool and on any cluster.
+Jobs are sent in batches (:func:`batches`: about four per worker, and at most
+:data:`MAX_BATCH` jobs, so a study of thousands of teacher-arms sends tens of runs per
+task, not one, and no worker idles long at the end waiting for another's last batch),
+every batch runs on one BLAS thread (:func:`tutor.workers.one_blas_thread`), and
+results come back in the jobs' order. A job's result depends only on its arguments (each
+seeds its own generator), so a study gives the same numbers here, on the pool and on
+any cluster.
 
 Examples
 --------
@@ -34,12 +36,16 @@ from collections.abc import Callable, Sequence
 from .errors import InvalidParameterError
 from .workers import max_workers, one_blas_thread, process_pool
 
-__all__ = ["Engine", "batches", "check_scheduler", "run_batch"]
+__all__ = ["Engine", "MAX_BATCH", "batches", "check_scheduler", "run_batch"]
 
 #: a scheduler's address: "auto" (a local Dask cluster) or tcp://HOST:PORT
 _ADDRESS = re.compile(r"tcp://[A-Za-z0-9.\-\[\]:]{1,253}:\d{1,5}")
 #: batches per worker: enough to balance uneven jobs, few enough to keep overheads small
 BATCHES_PER_WORKER = 4
+#: the most jobs in one batch (a teacher-arm of the adaptive study is 3 runs, 0.2-1.5 s):
+#: with 468-job batches on 2 workers, one worker sat idle about 50 s at the end of the
+#: adaptive study, and its checkpoint file got a line only every few minutes
+MAX_BATCH = 16
 
 
 def check_scheduler(scheduler) -> str | None:
@@ -58,8 +64,8 @@ def check_scheduler(scheduler) -> str | None:
 
 def batches(n_jobs: int, workers: int) -> list[range]:
     """The jobs 0 .. n_jobs - 1 cut into consecutive batches, about
-    :data:`BATCHES_PER_WORKER` per worker."""
-    size = max(1, math.ceil(n_jobs / (BATCHES_PER_WORKER * max(1, workers))))
+    :data:`BATCHES_PER_WORKER` per worker and at most :data:`MAX_BATCH` jobs each."""
+    size = min(MAX_BATCH, max(1, math.ceil(n_jobs / (BATCHES_PER_WORKER * max(1, workers)))))
     return [range(i, min(i + size, n_jobs)) for i in range(0, n_jobs, size)]
 
 

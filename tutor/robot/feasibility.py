@@ -135,6 +135,7 @@ class FeasibilityMap(_PathCriterion):
         nx, ny, nz = self.shape
         self._layer = nx * ny * nz
         self._strides = np.array([ny * nz, nz, 1])
+        self._cell_sign = self._cell_signs(m).ravel()
 
     def __repr__(self) -> str:
         return (
@@ -165,19 +166,34 @@ class FeasibilityMap(_PathCriterion):
         axes = [self.origin[i] + self.spacing * np.arange(self.shape[i]) for i in range(3)]
         return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
 
-    def value(self, points, gripper=None) -> np.ndarray:
-        """Interpolated margin (m) at ``points`` (..., 3); -inf outside the grid.
+    @staticmethod
+    def _cell_signs(m: np.ndarray) -> np.ndarray:
+        """Per voxel, the sign its cell's interpolation must have (2, nx, ny, nz), int8.
 
-        Parameters
-        ----------
-        points : array_like (..., 3)
-        gripper : array_like (...), optional
-            Hand command per point (0 open .. 1 closed); default open.
-
-        Returns
-        -------
-        ndarray (...) of float
+        The cell whose lowest corner is the voxel: +1 when all eight corner margins are
+        positive, -1 when none is, 0 when they differ. The interpolation is a weighted
+        sum of the corners with weights in [0, 1], one of each pair at least 1/2, so its
+        sign is known exactly without computing it in the first two cases (no rounding
+        can make a sum of positive terms zero or negative). Voxels on the grid's upper
+        faces start no cell (0).
         """
+        low = m[:, :-1, :-1, :-1]
+        high = low.copy()
+        for dx in (0, 1):
+            for dy in (0, 1):
+                for dz in (0, 1):
+                    corner = m[:, dx:m.shape[1] - 1 + dx, dy:m.shape[2] - 1 + dy,
+                               dz:m.shape[3] - 1 + dz]
+                    low = np.minimum(low, corner)
+                    high = np.maximum(high, corner)
+        sign = np.zeros(m.shape, dtype=np.int8)
+        sign[:, :-1, :-1, :-1] = np.where(low > 0, 1, np.where(high <= 0, -1, 0))
+        return sign
+
+    def _cells(self, points, gripper):
+        """The checked points (n, 3), their shape, whether each is on the grid, the flat
+        index of its cell's lowest corner (in its hand's layer) and its place in the
+        cell (n, 3)."""
         P = np.asarray(points, dtype=float)
         if P.ndim < 1 or P.shape[-1] != 3:
             raise InvalidParameterError(f"points must have shape (..., 3), got {P.shape}")
@@ -198,6 +214,10 @@ class FeasibilityMap(_PathCriterion):
                     f"gripper must have shape {shape} like the points, got {np.shape(gripper)}"
                 ) from exc
             base = base + np.where(g >= 0.5, self._layer, 0)
+        return P, shape, inside, base, f
+
+    def _interpolate(self, base: np.ndarray, f: np.ndarray) -> np.ndarray:
+        """The trilinear interpolation in the cells ``base`` at places ``f`` (n, 3)."""
         sx, sy, sz = self._strides
         m = self._flat
         fx, fy, fz = f[:, 0], f[:, 1], f[:, 2]
@@ -206,8 +226,36 @@ class FeasibilityMap(_PathCriterion):
         c01 = m[base + sy] * gz + m[base + sy + sz] * fz
         c10 = m[base + sx] * gz + m[base + sx + sz] * fz
         c11 = m[base + sx + sy] * gz + m[base + sx + sy + sz] * fz
-        v = (c00 * gy + c01 * fy) * gx + (c10 * gy + c11 * fy) * fx
-        return np.where(inside, v, -np.inf).reshape(shape)
+        return (c00 * gy + c01 * fy) * gx + (c10 * gy + c11 * fy) * fx
+
+    def value(self, points, gripper=None) -> np.ndarray:
+        """Interpolated margin (m) at ``points`` (..., 3); -inf outside the grid.
+
+        Parameters
+        ----------
+        points : array_like (..., 3)
+        gripper : array_like (...), optional
+            Hand command per point (0 open .. 1 closed); default open.
+
+        Returns
+        -------
+        ndarray (...) of float
+        """
+        _, shape, inside, base, f = self._cells(points, gripper)
+        return np.where(inside, self._interpolate(base, f), -np.inf).reshape(shape)
+
+    def _positive(self, points, gripper=None):
+        """``value(points, gripper) > 0`` (...) exactly, interpolating only in the cells
+        whose corners disagree (see :meth:`_cell_signs`), and the points (n, 3) and
+        whether each is off the grid (...)."""
+        P, shape, inside, base, f = self._cells(points, gripper)
+        sign = self._cell_sign[base]
+        positive = sign > 0
+        mixed = np.flatnonzero((sign == 0) & inside)
+        if mixed.size:
+            positive[mixed] = self._interpolate(base[mixed], f[mixed]) > 0
+        positive &= inside
+        return positive.reshape(shape), P, ~inside.reshape(shape)
 
     def contains(self, points, gripper=None) -> np.ndarray:
         """Whether each point (..., 3) is in X (tool pointing down).
@@ -224,7 +272,7 @@ class FeasibilityMap(_PathCriterion):
         -------
         ndarray (...) of bool
         """
-        return self.value(points, gripper) > 0
+        return self._positive(points, gripper)[0]
 
     def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
         P, G = check_paths(paths, gripper)
@@ -463,8 +511,7 @@ class MapCheck(_PathCriterion):
         ndarray (..., T) of bool
         """
         P, G = check_paths(points, gripper)
-        value, unknown = self._lookup(P, G)
-        out = value > 0
+        out, unknown = self._lookup(P, G)
         # a path is judged by its first sample outside X: follow it in full only when
         # an unknown sample comes before any the map already rejects
         redo = first_bad_sample(unknown) < first_bad_sample(~out & ~unknown)  # (...)
@@ -474,18 +521,21 @@ class MapCheck(_PathCriterion):
         return out
 
     def _lookup(self, P, G) -> tuple[np.ndarray, np.ndarray]:
-        """The map's margins (..., T) and the samples it cannot answer: off its grid
-        but within the arm's reach."""
-        value = self.map.value(P, G)
-        near = np.linalg.norm(P - self.shoulder, axis=-1) <= self.reach
-        return value, np.isneginf(value) & near
+        """Whether the map says each sample (..., T) is in X, and the samples it cannot
+        answer: off its grid but within the arm's reach."""
+        in_x, flat, off = self.map._positive(P, G)
+        unknown = off.reshape(-1)
+        if unknown.any():  # only the off-grid samples need the distance to the shoulder
+            rows = np.flatnonzero(unknown)
+            unknown[rows] = np.linalg.norm(flat[rows] - self.shoulder, axis=-1) <= self.reach
+        return in_x, unknown.reshape(off.shape)
 
     def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
         P, G = check_paths(paths, gripper)
         known = _known_bad(known_bad, P.shape[:-1])
-        value, unknown = self._lookup(P, G)
+        in_x, unknown = self._lookup(P, G)
         first_known = first_bad_sample(known)
-        first = np.minimum(first_bad_sample((value <= 0) & ~unknown), first_known)
+        first = np.minimum(first_bad_sample(~in_x & ~unknown), first_known)
         # an off-grid sample the arm may reach comes first: follow the path in full,
         # from the start up to its first known-bad sample
         redo = first_bad_sample(unknown) < first
