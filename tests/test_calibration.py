@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -213,6 +214,19 @@ def test_the_calibrate_command_runs_end_to_end_on_the_quick_budget(tmp_path, cap
     assert rechecked.bundled() == found.bundled()
     pd.testing.assert_frame_equal(predicted_again, predicted)  # same seeds, same code
     assert list(table_again.statistic) == list(calibration.STATISTICS)
+    # ... with more (or fewer) posterior draws when asked, the rest of the budget kept
+    assert main(["calibrate", "--recheck", "--generations", "2", "--out", str(out)]) == 2
+    assert "InvalidParameterError" in capsys.readouterr().err
+    draws = calibration.QUICK_BUDGET.draws + 1
+    assert main(["calibrate", "--recheck", "--draws", str(draws), "--workers", "1",
+                 "--out", str(out)]) == 0
+    more, predicted_more, _ = calibration.load(out)
+    assert len(predicted_more) == draws and more.budget.draws == draws
+    assert dataclasses.replace(more.budget, draws=found.budget.draws) == found.budget
+    pd.testing.assert_frame_equal(more.particles, found.particles)
+    assert f"{draws} predictive draws" in (out / "calibration_report.txt").read_text("utf-8")
+    with pytest.raises(InvalidParameterError, match="draws"):
+        calibration.recheck(out, draws=1)
 
 
 def test_a_folder_without_a_calibration_is_refused_by_name(tmp_path):

@@ -194,7 +194,8 @@ def _parser() -> argparse.ArgumentParser:
     cal.add_argument(
         "--recheck", action="store_true",
         help="run only the predictive checks and the report again for the calibration in "
-        "--out (its posterior and bundled point kept; give the seed it was run with)",
+        "--out (its posterior and bundled point kept; give the seed it was run with; "
+        "--draws sets how many posterior draws they take)",
     )
     cal.add_argument(
         "--seed", type=_whole_number(0, MAX_SEED), default=0, help="random seed (default 0)"
@@ -335,13 +336,15 @@ def calibrate_command(args) -> None:
     budget = dataclasses.replace(budget, **chosen)
     out = check_out_dir(args.out)  # before any work
     if args.recheck:
-        if args.from_history or chosen or args.quick:
+        if args.from_history or set(chosen) - {"draws"} or args.quick:
             raise InvalidParameterError(
                 "--recheck reruns the checks of the calibration in --out with its own "
-                "budget: drop --from-history, --quick and the budget options"
+                "budget (--draws aside): drop --from-history, --quick, --population-size, "
+                "--generations and --max-simulations"
             )
         found, table, paths = calibration.recheck(
-            out, seed=args.seed, workers=args.workers, scheduler=args.scheduler
+            out, seed=args.seed, workers=args.workers, scheduler=args.scheduler,
+            draws=args.draws,
         )
         print(calibration.format_report(found, table))
         print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
