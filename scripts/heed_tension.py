@@ -1,0 +1,69 @@
+"""Why one population cannot give both Experiment 1's VF and Experiment 2's BF levels.
+
+The calibration fits ``heed`` (the chance that a teacher shown failures aims the next
+demo at them rather than following their own plan) to Experiment 1, whose VF people
+were inefficient. This script reruns both experiments' cohorts with the bundled
+population and with every teacher heeding (``heed`` = 1, nothing else changed), on the
+same seeds, and prints each condition's level (Experiment 1: median eta, the paper's
+statistic; Experiment 2: mean eta) and demos kept per run, averaged over the seeds,
+beside the paper's. NF is the control: it is shown nothing, so heed cannot move it.
+
+Run:  .venv/bin/python scripts/heed_tension.py [--seeds 10] [--workers N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+
+import pandas as pd
+
+from tutor import paper
+from tutor.engine import Engine
+from tutor.study.cohort import run_experiment
+from tutor.teachers.traits import DEFAULT_POPULATION
+
+#: (label, heed_low, heed_high): the bundled range, and every teacher heeding
+HEEDS = (
+    (f"bundled {DEFAULT_POPULATION.heed_low:g}-{DEFAULT_POPULATION.heed_high:g}",
+     DEFAULT_POPULATION.heed_low, DEFAULT_POPULATION.heed_high),
+    ("every teacher heeds (1)", 1.0, 1.0),
+)
+
+
+def levels(seeds: int, workers=None) -> pd.DataFrame:
+    """One row per heed, experiment, seed and condition: eta level and demos kept."""
+    rows = []
+    with Engine(workers) as engine:
+        for label, low, high in HEEDS:
+            population = dataclasses.replace(DEFAULT_POPULATION, heed_low=low, heed_high=high)
+            for experiment in (1, 2):
+                for seed in range(seeds):
+                    runs = run_experiment(experiment, seed=seed, progress=False,
+                                          engine=engine, population=population).runs
+                    by = runs.groupby("condition")
+                    eta = by.eta.median() if experiment == 1 else by.eta.mean()
+                    for condition, value in eta.items():
+                        rows.append({"heed": label, "experiment": experiment, "seed": seed,
+                                     "condition": condition, "eta": value,
+                                     "demos": by.n_demos.mean()[condition]})
+    return pd.DataFrame(rows)
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--workers", type=int, default=None)
+    args = parser.parse_args(argv)
+    table = levels(args.seeds, args.workers)
+    mean = table.groupby(["experiment", "condition", "heed"])[["eta", "demos"]].mean()
+    papers = {1: paper.PAPER_MEDIAN_ETA, 2: paper.PAPER_MEAN_ETA}
+    for (experiment, condition), part in mean.groupby(level=[0, 1]):
+        cells = ", ".join(f"{heed}: {100 * r.eta:.1f} % ({r.demos:.1f} demos)"
+                          for (_, _, heed), r in part.iterrows())
+        level = 100 * papers[experiment][condition]
+        print(f"Experiment {experiment} {condition} (paper {level:.1f} %): {cells}")
+
+
+if __name__ == "__main__":
+    main()
