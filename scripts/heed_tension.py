@@ -19,6 +19,7 @@ import dataclasses
 import pandas as pd
 
 from tutor import paper
+from tutor.__main__ import _whole_number
 from tutor.engine import Engine
 from tutor.study.cohort import run_experiment
 from tutor.teachers.traits import DEFAULT_POPULATION
@@ -43,19 +44,25 @@ def levels(seeds: int, workers=None) -> pd.DataFrame:
                                           engine=engine, population=population).runs
                     by = runs.groupby("condition")
                     eta = by.eta.median() if experiment == 1 else by.eta.mean()
+                    demos = by.n_demos.mean()
                     for condition, value in eta.items():
                         rows.append({"heed": label, "experiment": experiment, "seed": seed,
                                      "condition": condition, "eta": value,
-                                     "demos": by.n_demos.mean()[condition]})
+                                     "demos": demos[condition]})
     return pd.DataFrame(rows)
 
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seeds", type=int, default=10)
-    parser.add_argument("--workers", type=int, default=None)
+    parser.add_argument("--seeds", type=_whole_number(1, 1000, " seeds"), default=10)
+    parser.add_argument("--workers", type=_whole_number(1), default=None)
     args = parser.parse_args(argv)
-    table = levels(args.seeds, args.workers)
+    report(levels(args.seeds, args.workers))
+
+
+def report(table: pd.DataFrame) -> None:
+    """Print each condition's level under each heed (means over the seeds of ``table``,
+    as :func:`levels` makes it) beside the paper's."""
     mean = table.groupby(["experiment", "condition", "heed"])[["eta", "demos"]].mean()
     papers = {1: paper.PAPER_MEDIAN_ETA, 2: paper.PAPER_MEAN_ETA}
     for (experiment, condition), part in mean.groupby(level=[0, 1]):

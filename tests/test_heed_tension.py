@@ -22,6 +22,6 @@ def test_heed_moves_only_the_conditions_that_show_something(capsys):
         assert wide.loc[(experiment, "NF"), bundled] == wide.loc[(experiment, "NF"), heeding]
     # the guided maze teachers are the ones it moves
     assert (wide.loc[1, heeding] != wide.loc[1, bundled]).any()
-    heed_tension.main(["--seeds", "1"])
+    heed_tension.report(table)
     out = capsys.readouterr().out
     assert out.count("Experiment") == 7 and "paper 23.5 %" in out

@@ -740,11 +740,8 @@ def recheck(folder, seed: int = 0, workers=None, scheduler=None, draws: int | No
     if not found.where.endswith(note):
         found = dataclasses.replace(found, where=found.where + note)
     if draws is not None:
-        if isinstance(draws, bool) or not isinstance(draws, int | np.integer) or draws < 2:
-            raise InvalidParameterError(f"draws must be a whole number >= 2, got {draws!r}")
-        found = dataclasses.replace(
-            found, budget=dataclasses.replace(found.budget, draws=int(draws))
-        )
+        budget = _check_budget(dataclasses.replace(found.budget, draws=draws))
+        found = dataclasses.replace(found, budget=budget)
     predicted, at_point = (
         predictive(found, seed=seed + 1, workers=workers, scheduler=scheduler, at_point=point)
         for point in (False, True)
