@@ -1,12 +1,33 @@
-"""EM for the TP-GMM on sufficient statistics, accelerated by SQUAREM.
+r"""EM for the TP-GMM on sufficient statistics, accelerated by SQUAREM, compiled.
 
 The model (:mod:`tutor.tpgmm.model`) hands EM the standardised local data; see the
 package docstring for the features, the covariance prior and why EM never decreases
 the objective.
+
+With the quadratic features :math:`\phi(u)` of every frame's local state stacked in
+``Phi`` (N, F), one iteration is
+
+.. math::
+
+    \log p(k, u_n) = W_k^\top \phi_n, \qquad
+    \gamma_{kn} = \frac{\exp \log p(k, u_n)}{\sum_l \exp \log p(l, u_n)}, \qquad
+    S = \gamma\, \Phi,
+
+where :math:`W_k` holds, for each frame, :math:`-\tfrac12 \Sigma_k^{-1}` (its upper
+triangle, off-diagonal terms doubled), :math:`\Sigma_k^{-1} \mu_k` and the constant
+:math:`\log \pi_k - \tfrac12 \sum_j (\mu_k^\top \Sigma_k^{-1} \mu_k + \log|2\pi\Sigma_k|)`;
+the M-step reads weights, means and covariances off :math:`S`.
+
+The iteration is compiled with numba: a fit is 10-40 iterations on a few hundred
+samples, where numpy's cost per call (about half of each iteration, measured on the
+adaptive study's fits) outweighed the arithmetic. The two products with ``Phi`` are
+BLAS calls as before; the small factorisations (one Cholesky factor per component and
+frame, D <= 5) are written out.
 """
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from .linalg import LOG_2PI
@@ -24,63 +45,35 @@ class EM:
         self.n_quad = len(self.iu[0])
         quad = U[:, :, self.iu[0]] * U[:, :, self.iu[1]]  # (P, N, Dq)
         feats = np.concatenate([quad, U], axis=2)  # (P, N, Dq + D)
-        self.Phi = np.concatenate(
-            [feats.transpose(1, 0, 2).reshape(N, -1), np.ones((N, 1))], axis=1
+        self.Phi = np.ascontiguousarray(
+            np.concatenate([feats.transpose(1, 0, 2).reshape(N, -1), np.ones((N, 1))], axis=1),
+            dtype=float,
         )  # (N, F)
         self.PhiT = np.ascontiguousarray(self.Phi.T)  # (F, N): E-step reductions run along N
-        self.psi = reg_covar * N / K
-        # the quadratic features' weights from a precision, flattened (D * D, Dq): the
-        # mean of its two triangles, -1/2 on the diagonal and -1 off it (the features
-        # hold each off-diagonal product once), so no symmetrising is needed
-        self.from_precision = np.zeros((D * D, self.n_quad))
-        # the second moments from their upper triangle, (Dq, D * D)
-        self.to_moments = np.zeros((self.n_quad, D * D))
-        for q, (i, j) in enumerate(zip(*self.iu, strict=True)):
-            self.from_precision[[i * D + j, j * D + i], q] = -0.5  # once on the diagonal
-            self.to_moments[q, i * D + j] = self.to_moments[q, j * D + i] = 1.0
-        self.ridge = self.psi * np.eye(D)
+        self.psi = float(reg_covar * N / K)
+        self._pairs = (self.iu[0].astype(np.int64), self.iu[1].astype(np.int64))
 
     def m_step(self, resp: np.ndarray):
         """Parameters from responsibilities ``resp`` (K, N)."""
-        return self.params(resp @ self.Phi)
+        return self.params(np.ascontiguousarray(resp, dtype=float) @ self.Phi)
 
     def params(self, S: np.ndarray):
         """Weights (K,), means (P, K, D), covariances (P, K, D, D) from statistics S (K, F).
 
         Raises ``Infeasible`` when extrapolated statistics give no valid mixture.
         """
-        P, D, K = self.P, self.D, self.K
-        Nk = S[:, -1]
-        if not (Nk.min() >= 0 and np.isfinite(S).all()):
+        weights, mean, cov, ok = _params(
+            np.ascontiguousarray(S, dtype=float), self.P, self.D, *self._pairs, self.psi, self.N
+        )
+        if not ok:
             raise Infeasible
-        feats = S[:, :-1].reshape(K, P, self.n_quad + D)
-        Nk_safe = np.maximum(Nk, 1e-10 * self.N)[:, None, None]
-        mean = feats[..., self.n_quad :] / Nk_safe  # (K, P, D)
-        second = (feats[..., : self.n_quad] @ self.to_moments).reshape(K, P, D, D)
-        scatter = second - Nk[:, None, None, None] * (mean[..., :, None] * mean[..., None, :])
-        cov = (scatter + self.ridge) / Nk_safe[..., None]
-        return Nk / self.N, mean.transpose(1, 0, 2), cov.transpose(1, 0, 2, 3)
+        return weights, mean, cov
 
     def log_joint(self, params):
         """log pi_k + sum_j log N(u^(j) | mu_k^(j), Sigma_k^(j)) (K, N) and the log prior."""
-        weights, mean, cov = params
-        P, K, D = mean.shape
-        try:
-            chol = np.linalg.cholesky(cov)
-        except np.linalg.LinAlgError:
-            raise Infeasible from None
-        prec = np.linalg.inv(cov)  # (P, K, D, D)
-        logdet = 2.0 * np.log(np.diagonal(chol, axis1=-2, axis2=-1)).sum(-1)  # (P, K)
-        lin = np.einsum("pkij,pkj->pki", prec, mean)  # (P, K, D)
-        W = np.empty((K, P * (self.n_quad + D) + 1))
-        blocks = W[:, :-1].reshape(K, P, self.n_quad + D)
-        blocks[..., : self.n_quad] = (prec.reshape(P, K, D * D) @ self.from_precision).transpose(
-            1, 0, 2
-        )
-        blocks[..., self.n_quad :] = lin.transpose(1, 0, 2)
-        const = -0.5 * ((lin * mean).sum(-1) + logdet).sum(0) - 0.5 * P * D * LOG_2PI
-        W[:, -1] = const + np.log(np.maximum(weights, 1e-300))  # W @ PhiT = log joint
-        log_prior = -0.5 * self.psi * np.einsum("pkii->", prec)
+        W, log_prior, ok = _joint_weights(*_contiguous(params), *self._pairs, self.psi)
+        if not ok:
+            raise Infeasible
         return W @ self.PhiT, log_prior
 
     def warm_responsibilities(self, params, floor: float):
@@ -115,17 +108,12 @@ class EM:
 
     def e_step(self, params):
         """Objective at ``params`` and the sufficient statistics of the next M-step."""
-        resp, log_prior = self.log_joint(params)  # (K, N) log joint, made responsibilities
-        top = resp.max(axis=0)
-        np.subtract(resp, top, out=resp)
-        # exp(-100) ~ 4e-44 is already nothing next to the top term (1); clipping keeps
-        # exp and the next product away from subnormal numbers, which are 10x slower
-        np.maximum(resp, -100.0, out=resp)
-        np.exp(resp, out=resp)
-        total = resp.sum(axis=0)
-        objective = (np.log(total).sum() + top.sum() + log_prior) / self.N
-        np.divide(resp, total, out=resp)
-        return float(objective), resp @ self.Phi
+        objective, S, ok = _e_step(
+            *_contiguous(params), self.Phi, self.PhiT, *self._pairs, self.psi
+        )
+        if not ok:
+            raise Infeasible
+        return float(objective), S
 
     def run(self, params, tol: float, max_iter: int):
         """EM accelerated by SQUAREM (Varadhan & Roland 2008) on the sufficient statistics.
@@ -134,40 +122,200 @@ class EM:
         keeps the extrapolated point only if its objective beats the plain EM
         step, so the objective never decreases. Stops when one plain EM step
         gains less than ``tol``; ``n_iter`` counts E-steps.
+
+        Returns weights, means, covariances, objective, n_iter and converged.
         """
-        obj0, S1 = self.e_step(params)
-        S0 = None
-        n_iter, converged = 1, False
-        best = (params, obj0)
-        while n_iter < max_iter:
-            params1 = self.params(S1)
-            obj1, S2 = self.e_step(params1)
-            n_iter += 1
-            best = (params1, obj1)
-            if obj1 - obj0 < tol:
-                converged = True
-                break
-            if S0 is None or n_iter >= max_iter:
-                S0, obj0, S1 = S1, obj1, S2
-                continue
-            r = S1 - S0
-            v = S2 - 2.0 * S1 + S0
-            alpha = -np.sqrt((r * r).sum() / max((v * v).sum(), 1e-300))
-            if alpha < -1.0:
-                try:
-                    params_x = self.params(S0 - 2.0 * alpha * r + alpha * alpha * v)
-                    obj_x, S_x = self.e_step(params_x)
-                    n_iter += 1
-                    if obj_x >= obj1:
-                        best = (params_x, obj_x)
-                        S0, obj0, S1 = None, obj_x, S_x
-                        continue
-                except Infeasible:
-                    pass
-            S0, obj0, S1 = S1, obj1, S2
-        (weights, mean, cov), objective = best
-        return weights, mean, cov, objective, n_iter, converged
+        weights, mean, cov, objective, n_iter, converged, ok = _run(
+            *_contiguous(params),
+            self.Phi,
+            self.PhiT,
+            *self._pairs,
+            self.psi,
+            float(tol),
+            int(max_iter),
+        )
+        if not ok:
+            raise Infeasible
+        return weights, mean, cov, float(objective), int(n_iter), bool(converged)
 
 
 class Infeasible(Exception):
     """Extrapolated statistics that describe no valid mixture."""
+
+
+def _contiguous(params):
+    return tuple(np.ascontiguousarray(a, dtype=float) for a in params)
+
+
+# ---------------------------------------------------------------- compiled kernels
+# Each returns a flag ``ok`` instead of raising: False where numpy's Cholesky factor
+# would fail (a covariance that is not positive definite) or statistics are not finite.
+
+
+@numba.njit(cache=True)
+def _params(S, P, D, iu0, iu1, psi, N):
+    """M-step: weights (K,), means (P, K, D), covariances (P, K, D, D) and ok."""
+    K, F = S.shape
+    nq = iu0.shape[0]
+    weights = np.empty(K)
+    mean = np.empty((P, K, D))
+    cov = np.empty((P, K, D, D))
+    for k in range(K):
+        Nk = S[k, F - 1]
+        if not Nk >= 0.0:
+            return weights, mean, cov, False
+        for f in range(F):
+            if not np.isfinite(S[k, f]):
+                return weights, mean, cov, False
+        Nk_safe = max(Nk, 1e-10 * N)
+        weights[k] = Nk / N
+        for p in range(P):
+            base = p * (nq + D)
+            for i in range(D):
+                mean[p, k, i] = S[k, base + nq + i] / Nk_safe
+            for q in range(nq):
+                i, j = iu0[q], iu1[q]
+                value = S[k, base + q] - Nk * (mean[p, k, i] * mean[p, k, j])
+                if i == j:
+                    value += psi  # the covariance prior's ridge
+                value /= Nk_safe
+                cov[p, k, i, j] = value
+                cov[p, k, j, i] = value
+    return weights, mean, cov, True
+
+
+@numba.njit(cache=True)
+def _joint_weights(weights, mean, cov, iu0, iu1, psi):
+    """W (K, F) with ``W @ PhiT`` the log joint, the log prior and ok."""
+    P, K, D = mean.shape
+    nq = iu0.shape[0]
+    F = P * (nq + D) + 1
+    W = np.empty((K, F))
+    L = np.zeros((D, D))
+    Linv = np.zeros((D, D))
+    prec = np.zeros((D, D))
+    trace = 0.0
+    for k in range(K):
+        const = 0.0
+        for p in range(P):
+            # Cholesky factor L of the covariance, and log |Sigma| / 2
+            half_logdet = 0.0
+            for j in range(D):
+                s = cov[p, k, j, j]
+                for q in range(j):
+                    s -= L[j, q] * L[j, q]
+                if not s > 0.0:
+                    return W, 0.0, False
+                L[j, j] = np.sqrt(s)
+                half_logdet += np.log(L[j, j])
+                for i in range(j + 1, D):
+                    s = cov[p, k, i, j]
+                    for q in range(j):
+                        s -= L[i, q] * L[j, q]
+                    L[i, j] = s / L[j, j]
+            # the precision L^-T L^-1
+            for j in range(D):
+                Linv[j, j] = 1.0 / L[j, j]
+                for i in range(j + 1, D):
+                    s = 0.0
+                    for q in range(j, i):
+                        s -= L[i, q] * Linv[q, j]
+                    Linv[i, j] = s / L[i, i]
+            for i in range(D):
+                for j in range(i, D):
+                    s = 0.0
+                    for q in range(j, D):
+                        s += Linv[q, i] * Linv[q, j]
+                    prec[i, j] = s
+                    prec[j, i] = s
+            base = p * (nq + D)
+            for q in range(nq):
+                i, j = iu0[q], iu1[q]
+                W[k, base + q] = -0.5 * prec[i, i] if i == j else -prec[i, j]
+            quad = 0.0
+            for i in range(D):
+                s = 0.0
+                for j in range(D):
+                    s += prec[i, j] * mean[p, k, j]
+                W[k, base + nq + i] = s
+                quad += s * mean[p, k, i]
+                trace += prec[i, i]
+            const += quad + 2.0 * half_logdet
+        W[k, F - 1] = -0.5 * const - 0.5 * P * D * LOG_2PI + np.log(max(weights[k], 1e-300))
+    return W, -0.5 * psi * trace, True
+
+
+@numba.njit(cache=True)
+def _e_step(weights, mean, cov, Phi, PhiT, iu0, iu1, psi):
+    """Objective (penalised mean log-likelihood), statistics S (K, F) and ok."""
+    W, log_prior, ok = _joint_weights(weights, mean, cov, iu0, iu1, psi)
+    if not ok:
+        return np.nan, W, False
+    resp = W @ PhiT  # (K, N) log joint, made responsibilities in place
+    K, N = resp.shape
+    total_log = 0.0
+    for n in range(N):
+        top = resp[0, n]
+        for k in range(1, K):
+            top = max(top, resp[k, n])
+        total = 0.0
+        for k in range(K):
+            # exp(-100) ~ 4e-44 is already nothing next to the top term (1); clipping
+            # keeps exp and the next product away from subnormal numbers (10x slower)
+            value = np.exp(max(resp[k, n] - top, -100.0))
+            resp[k, n] = value
+            total += value
+        total_log += np.log(total) + top
+        for k in range(K):
+            resp[k, n] /= total
+    return (total_log + log_prior) / N, resp @ Phi, True
+
+
+@numba.njit(cache=True)
+def _run(weights, mean, cov, Phi, PhiT, iu0, iu1, psi, tol, max_iter):
+    """SQUAREM-accelerated EM (see :meth:`EM.run`); returns the best parameters,
+    objective, n_iter, converged and ok (False: a plain EM step was infeasible)."""
+    P, K, D = mean.shape
+    N = Phi.shape[0]
+    obj0, S1, ok = _e_step(weights, mean, cov, Phi, PhiT, iu0, iu1, psi)
+    if not ok:
+        return weights, mean, cov, obj0, 1, False, False
+    S0 = S1
+    have_S0 = False
+    n_iter, converged = 1, False
+    best_w, best_m, best_c, best_obj = weights, mean, cov, obj0
+    while n_iter < max_iter:
+        w1, m1, c1, ok = _params(S1, P, D, iu0, iu1, psi, N)
+        if not ok:
+            return best_w, best_m, best_c, best_obj, n_iter, False, False
+        obj1, S2, ok = _e_step(w1, m1, c1, Phi, PhiT, iu0, iu1, psi)
+        if not ok:
+            return best_w, best_m, best_c, best_obj, n_iter, False, False
+        n_iter += 1
+        best_w, best_m, best_c, best_obj = w1, m1, c1, obj1
+        if obj1 - obj0 < tol:
+            converged = True
+            break
+        if not have_S0 or n_iter >= max_iter:
+            S0, obj0, S1 = S1, obj1, S2
+            have_S0 = True
+            continue
+        r = S1 - S0
+        v = S2 - 2.0 * S1 + S0
+        alpha = -np.sqrt((r * r).sum() / max((v * v).sum(), 1e-300))
+        if alpha < -1.0:
+            wx, mx, cx, ok = _params(
+                S0 - 2.0 * alpha * r + alpha * alpha * v, P, D, iu0, iu1, psi, N
+            )
+            if ok:
+                obj_x, S_x, ok = _e_step(wx, mx, cx, Phi, PhiT, iu0, iu1, psi)
+                if ok:
+                    n_iter += 1
+                    if obj_x >= obj1:
+                        best_w, best_m, best_c, best_obj = wx, mx, cx, obj_x
+                        obj0, S1 = obj_x, S_x
+                        have_S0 = False
+                        continue
+        S0, obj0, S1 = S1, obj1, S2
+        have_S0 = True
+    return best_w, best_m, best_c, best_obj, n_iter, converged, True
