@@ -12,6 +12,7 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
+import numba
 import numpy as np
 
 from ..errors import InvalidFileError, InvalidParameterError
@@ -190,43 +191,35 @@ class FeasibilityMap(_PathCriterion):
         sign[:, :-1, :-1, :-1] = np.where(low > 0, 1, np.where(high <= 0, -1, 0))
         return sign
 
-    def _cells(self, points, gripper):
-        """The checked points (n, 3), their shape, whether each is on the grid, the flat
-        index of its cell's lowest corner (in its hand's layer) and its place in the
-        cell (n, 3)."""
+    def _points(self, points, gripper):
+        """The checked points (n, 3), their shape and each one's hand command (n,)."""
         P = np.asarray(points, dtype=float)
         if P.ndim < 1 or P.shape[-1] != 3:
             raise InvalidParameterError(f"points must have shape (..., 3), got {P.shape}")
         shape = P.shape[:-1]
-        P = P.reshape(-1, 3)
-        u = (P - self.origin) / self.spacing
-        dims = np.array(self.shape)
-        inside = np.all((u >= -1e-6) & (u <= dims - 1 + 1e-6), axis=1)  # NaN is outside
-        u = np.where(inside[:, None], np.clip(u, 0, dims - 1), 0.0)
-        i0 = np.minimum(u.astype(np.intp), dims - 2)
-        f = u - i0
-        base = i0 @ self._strides
-        if gripper is not None:
-            try:
-                g = np.broadcast_to(np.asarray(gripper, dtype=float), shape).reshape(-1)
-            except ValueError as exc:
-                raise InvalidParameterError(
-                    f"gripper must have shape {shape} like the points, got {np.shape(gripper)}"
-                ) from exc
-            base = base + np.where(g >= 0.5, self._layer, 0)
-        return P, shape, inside, base, f
+        P = np.ascontiguousarray(P.reshape(-1, 3))
+        if gripper is None:
+            return P, shape, np.zeros(len(P))
+        try:
+            g = np.broadcast_to(np.asarray(gripper, dtype=float), shape).reshape(-1)
+        except ValueError as exc:
+            raise InvalidParameterError(
+                f"gripper must have shape {shape} like the points, got {np.shape(gripper)}"
+            ) from exc
+        return P, shape, np.ascontiguousarray(g)
 
-    def _interpolate(self, base: np.ndarray, f: np.ndarray) -> np.ndarray:
-        """The trilinear interpolation in the cells ``base`` at places ``f`` (n, 3)."""
-        sx, sy, sz = self._strides
-        m = self._flat
-        fx, fy, fz = f[:, 0], f[:, 1], f[:, 2]
-        gx, gy, gz = 1 - fx, 1 - fy, 1 - fz
-        c00 = m[base] * gz + m[base + sz] * fz
-        c01 = m[base + sy] * gz + m[base + sy + sz] * fz
-        c10 = m[base + sx] * gz + m[base + sx + sz] * fz
-        c11 = m[base + sx + sy] * gz + m[base + sx + sy + sz] * fz
-        return (c00 * gy + c01 * fy) * gx + (c10 * gy + c11 * fy) * fx
+    @property
+    def _grid(self) -> tuple:
+        """What the compiled lookups need of the map (see :func:`_status`)."""
+        return (
+            self.origin,
+            self.spacing,
+            np.array(self.shape, dtype=np.int64),
+            self._strides.astype(np.int64),
+            self._layer,
+            self._flat,
+            self._cell_sign,
+        )
 
     def value(self, points, gripper=None) -> np.ndarray:
         """Interpolated margin (m) at ``points`` (..., 3); -inf outside the grid.
@@ -241,21 +234,16 @@ class FeasibilityMap(_PathCriterion):
         -------
         ndarray (...) of float
         """
-        _, shape, inside, base, f = self._cells(points, gripper)
-        return np.where(inside, self._interpolate(base, f), -np.inf).reshape(shape)
+        P, shape, g = self._points(points, gripper)
+        return _values(P, g, *self._grid).reshape(shape)
 
     def _positive(self, points, gripper=None):
         """``value(points, gripper) > 0`` (...) exactly, interpolating only in the cells
-        whose corners disagree (see :meth:`_cell_signs`), and the points (n, 3) and
-        whether each is off the grid (...)."""
-        P, shape, inside, base, f = self._cells(points, gripper)
-        sign = self._cell_sign[base]
-        positive = sign > 0
-        mixed = np.flatnonzero((sign == 0) & inside)
-        if mixed.size:
-            positive[mixed] = self._interpolate(base[mixed], f[mixed]) > 0
-        positive &= inside
-        return positive.reshape(shape), P, ~inside.reshape(shape)
+        whose corners disagree (see :meth:`_cell_signs`), and whether each point is off
+        the grid (...)."""
+        P, shape, g = self._points(points, gripper)
+        positive, inside = _positives(P, g, *self._grid)
+        return positive.reshape(shape), ~inside.reshape(shape)
 
     def contains(self, points, gripper=None) -> np.ndarray:
         """Whether each point (..., 3) is in X (tool pointing down).
@@ -276,7 +264,17 @@ class FeasibilityMap(_PathCriterion):
 
     def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
         P, G = check_paths(paths, gripper)
-        return first_bad_sample(~self.contains(P, G) | _known_bad(known_bad, P.shape[:-1]))
+        known = _known_bad(known_bad, P.shape[:-1])
+        T = P.shape[-2]
+        first, _, _ = _scan_paths(
+            np.ascontiguousarray(P.reshape(-1, T, 3)),
+            np.ascontiguousarray(G.reshape(-1, T)),
+            np.ascontiguousarray(known.reshape(-1, T)),
+            *self._grid,
+            np.zeros(3),
+            -1.0,  # no reach: every off-grid sample is outside X
+        )
+        return first.reshape(P.shape[:-2])
 
     first_outside.__doc__ = _FIRST_DOC.format(how="a lookup.")
 
@@ -523,29 +521,151 @@ class MapCheck(_PathCriterion):
     def _lookup(self, P, G) -> tuple[np.ndarray, np.ndarray]:
         """Whether the map says each sample (..., T) is in X, and the samples it cannot
         answer: off its grid but within the arm's reach."""
-        in_x, flat, off = self.map._positive(P, G)
+        in_x, off = self.map._positive(P, G)
         unknown = off.reshape(-1)
         if unknown.any():  # only the off-grid samples need the distance to the shoulder
             rows = np.flatnonzero(unknown)
+            flat = P.reshape(-1, 3)
             unknown[rows] = np.linalg.norm(flat[rows] - self.shoulder, axis=-1) <= self.reach
         return in_x, unknown.reshape(off.shape)
 
     def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
         P, G = check_paths(paths, gripper)
         known = _known_bad(known_bad, P.shape[:-1])
-        in_x, unknown = self._lookup(P, G)
-        first_known = first_bad_sample(known)
-        first = np.minimum(first_bad_sample(~in_x & ~unknown), first_known)
+        T = P.shape[-2]
+        first, redo, first_known = _scan_paths(
+            np.ascontiguousarray(P.reshape(-1, T, 3)),
+            np.ascontiguousarray(G.reshape(-1, T)),
+            np.ascontiguousarray(known.reshape(-1, T)),
+            *self.map._grid,
+            self.shoulder,
+            self.reach,
+        )
         # an off-grid sample the arm may reach comes first: follow the path in full,
         # from the start up to its first known-bad sample
-        redo = first_bad_sample(unknown) < first
-        for i in np.argwhere(redo):
-            i = tuple(i)
-            first[i] = self.full.first_problem(P[i], G[i], int(first_known[i]))
-        return first
+        flat_P, flat_G = P.reshape(-1, T, 3), G.reshape(-1, T)
+        for i in np.flatnonzero(redo):
+            first[i] = self.full.first_problem(flat_P[i], flat_G[i], int(first_known[i]))
+        return first.reshape(P.shape[:-2])
 
     first_outside.__doc__ = _FIRST_DOC.format(
         how="the map answers inside its grid; a path with an off-grid sample the arm "
         "may reach before any failure is followed in full."
     )
 
+
+# ---------------------------------------------------------------- compiled lookups
+# One sample at a time, in the same arithmetic as the map's definition (trilinear
+# interpolation of float32 margins in float64), so that a path's scan can stop at its
+# first failure: judging 100 realisations then reads only the samples up to each
+# one's first failure instead of all of them.
+
+
+@numba.njit(cache=True)
+def _cell(x, y, z, g, origin, spacing, dims, strides, layer):
+    """Whether (x, y, z) is on the grid, its cell's flat index (in its hand's layer)
+    and its place in the cell."""
+    ux = (x - origin[0]) / spacing
+    uy = (y - origin[1]) / spacing
+    uz = (z - origin[2]) / spacing
+    inside = (
+        ux >= -1e-6
+        and ux <= dims[0] - 1 + 1e-6
+        and uy >= -1e-6
+        and uy <= dims[1] - 1 + 1e-6
+        and uz >= -1e-6
+        and uz <= dims[2] - 1 + 1e-6
+    )  # NaN is outside
+    if not inside:
+        return False, 0, 0.0, 0.0, 0.0
+    ux = min(max(ux, 0.0), dims[0] - 1)
+    uy = min(max(uy, 0.0), dims[1] - 1)
+    uz = min(max(uz, 0.0), dims[2] - 1)
+    ix = min(int(ux), dims[0] - 2)
+    iy = min(int(uy), dims[1] - 2)
+    iz = min(int(uz), dims[2] - 2)
+    base = ix * strides[0] + iy * strides[1] + iz * strides[2]
+    if g >= 0.5:
+        base += layer
+    return True, base, ux - ix, uy - iy, uz - iz
+
+
+@numba.njit(cache=True)
+def _interpolated(flat, base, fx, fy, fz, strides):
+    """The trilinear interpolation of the margins in cell ``base`` at (fx, fy, fz)."""
+    sx, sy, sz = strides[0], strides[1], strides[2]
+    gx, gy, gz = 1 - fx, 1 - fy, 1 - fz
+    c00 = flat[base] * gz + flat[base + sz] * fz
+    c01 = flat[base + sy] * gz + flat[base + sy + sz] * fz
+    c10 = flat[base + sx] * gz + flat[base + sx + sz] * fz
+    c11 = flat[base + sx + sy] * gz + flat[base + sx + sy + sz] * fz
+    return (c00 * gy + c01 * fy) * gx + (c10 * gy + c11 * fy) * fx
+
+
+@numba.njit(cache=True)
+def _in_x(base, fx, fy, fz, flat, sign, strides):
+    """An on-grid sample's interpolated margin > 0, interpolating only where its cell's
+    corners disagree (:meth:`FeasibilityMap._cell_signs`)."""
+    s = sign[base]
+    if s != 0:
+        return s > 0
+    return _interpolated(flat, base, fx, fy, fz, strides) > 0
+
+
+@numba.njit(cache=True)
+def _values(P, g, origin, spacing, dims, strides, layer, flat, sign):
+    out = np.empty(P.shape[0])
+    for n in range(P.shape[0]):
+        inside, base, fx, fy, fz = _cell(
+            P[n, 0], P[n, 1], P[n, 2], g[n], origin, spacing, dims, strides, layer
+        )
+        out[n] = _interpolated(flat, base, fx, fy, fz, strides) if inside else -np.inf
+    return out
+
+
+@numba.njit(cache=True)
+def _positives(P, g, origin, spacing, dims, strides, layer, flat, sign):
+    positive = np.zeros(P.shape[0], dtype=np.bool_)
+    on_grid = np.zeros(P.shape[0], dtype=np.bool_)
+    for n in range(P.shape[0]):
+        inside, base, fx, fy, fz = _cell(
+            P[n, 0], P[n, 1], P[n, 2], g[n], origin, spacing, dims, strides, layer
+        )
+        on_grid[n] = inside
+        if inside:
+            positive[n] = _in_x(base, fx, fy, fz, flat, sign, strides)
+    return positive, on_grid
+
+
+@numba.njit(cache=True)
+def _scan_paths(P, G, known, origin, spacing, dims, strides, layer, flat, sign, shoulder, reach):
+    """Per path (B, T): its first sample outside X or known bad (T when none), whether
+    an off-grid sample within ``reach`` of ``shoulder`` comes before it (the map cannot
+    answer: the path is to be followed in full) and its first known-bad sample."""
+    B, T = known.shape
+    first = np.empty(B, dtype=np.int64)
+    redo = np.zeros(B, dtype=np.bool_)
+    first_known = np.full(B, T, dtype=np.int64)
+    for b in range(B):
+        for t in range(T):
+            if known[b, t]:
+                first_known[b] = t
+                break
+        first[b] = first_known[b]
+        for t in range(first_known[b]):
+            x, y, z = P[b, t, 0], P[b, t, 1], P[b, t, 2]
+            inside, base, fx, fy, fz = _cell(
+                x, y, z, G[b, t], origin, spacing, dims, strides, layer
+            )
+            if inside:
+                if _in_x(base, fx, fy, fz, flat, sign, strides):
+                    continue
+                first[b] = t
+                break
+            dx, dy, dz = x - shoulder[0], y - shoulder[1], z - shoulder[2]
+            if np.sqrt(dx * dx + (dy * dy + dz * dz)) <= reach:
+                redo[b] = True
+                break
+            first[b] = t
+            break
+    return first, redo, first_known
