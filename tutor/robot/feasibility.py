@@ -663,7 +663,7 @@ def _scan_paths(P, G, known, origin, spacing, dims, strides, layer, flat, sign, 
                 first[b] = t
                 break
             dx, dy, dz = x - shoulder[0], y - shoulder[1], z - shoulder[2]
-            if np.sqrt(dx * dx + (dy * dy + dz * dz)) <= reach:
+            if np.sqrt(dx * dx + dy * dy + dz * dz) <= reach:  # numpy's norm, term by term
                 redo[b] = True
                 break
             first[b] = t
