@@ -511,6 +511,85 @@ def test_map_contains_is_exactly_the_interpolation_s_sign(fmap):
         assert np.array_equal(small.contains(pts, grip[:5000]), small.value(pts, grip[:5000]) > 0)
 
 
+def test_map_value_is_scipy_s_trilinear_interpolation(fmap):
+    """The compiled lookup against an independent one: scipy's RegularGridInterpolator
+    (linear) on each hand's layer, -inf off the grid."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    rng = np.random.default_rng(3)
+    axes = [fmap.origin[i] + fmap.spacing * np.arange(fmap.shape[i]) for i in range(3)]
+    pts = rng.uniform(fmap.origin - 0.03, fmap.upper + 0.03, (20_000, 3))
+    for closed in (0, 1):
+        layer = RegularGridInterpolator(
+            axes, fmap.margin[closed].astype(float), bounds_error=False, fill_value=-np.inf
+        )
+        got = fmap.value(pts, np.full(len(pts), float(closed)))
+        want = layer(pts)
+        assert np.array_equal(np.isinf(got), np.isinf(want))
+        finite = np.isfinite(want)
+        assert finite.sum() > 5000
+        np.testing.assert_allclose(got[finite], want[finite], rtol=0, atol=1e-9)
+
+
+def _first_outside_by_definition(check, paths, grip, known):
+    """The first sample each path (B, T) fails, sample by sample: off the grid beyond
+    the arm's reach or where the map says no; an off-grid sample within reach before
+    that sends the path to the full check (followed up to its first known-bad sample)."""
+    B, T = known.shape
+    out = np.empty(B, dtype=int)
+    inside = check.map.contains(paths, grip)
+    off = np.isinf(check.map.value(paths, grip))
+    for b in range(B):
+        known_at = int(np.argmax(known[b])) if known[b].any() else T
+        out[b] = known_at
+        for t in range(known_at):
+            if off[b, t]:
+                if np.linalg.norm(paths[b, t] - check.shoulder) <= check.reach:
+                    out[b] = check.full.first_problem(paths[b], grip[b], known_at)
+                else:
+                    out[b] = t
+                break
+            if not inside[b, t]:
+                out[b] = t
+                break
+    return out
+
+
+def test_first_outside_stops_where_the_definition_does(fmap, arm):
+    """The compiled scan stops at each path's first failure: the same index as checking
+    every sample, for paths that stay in X, leave it, leave the grid within and beyond
+    the arm's reach, and meet a known-bad sample first; the map alone and with the arm."""
+    from tutor.robot import MapCheck
+
+    check = MapCheck(fmap, arm)
+    rng = np.random.default_rng(11)
+    T = 60
+    start = np.array([0.45, 0.0, 0.25])
+    ends = rng.uniform(fmap.origin - 0.4, fmap.upper + 0.4, (40, 3))
+    s = np.linspace(0, 1, T)[None, :, None]
+    paths = start + s * (ends[:, None] - start)
+    paths += rng.normal(0, 0.003, paths.shape)
+    grip = (rng.uniform(0, 1, (40, T)) > 0.5).astype(float)
+    known = np.zeros((40, T), dtype=bool)
+    known[::4, T // 3] = True
+    got = check.first_outside(paths, grip, known_bad=known)
+    np.testing.assert_array_equal(got, _first_outside_by_definition(check, paths, grip, known))
+    kinds = {"whole": got == T, "known": got == T // 3, "failed": (got < T) & (got != T // 3)}
+    assert all(k.any() for k in kinds.values()), {k: int(v.sum()) for k, v in kinds.items()}
+    # the map alone: off the grid is outside X
+    alone = fmap.first_outside(paths, grip, known_bad=known)
+    bad = ~fmap.contains(paths, grip) | known
+    want = np.where(bad.any(axis=1), np.argmax(bad, axis=1), T)
+    np.testing.assert_array_equal(alone, want)
+    # batch shapes: one path, and paths in a (2, 20) grid
+    one = fmap.first_outside(paths[0], grip[0])
+    assert one.shape == () and int(one) == int(fmap.first_outside(paths[:1], grip[:1])[0])
+    np.testing.assert_array_equal(
+        check.first_outside(paths.reshape(2, 20, T, 3), grip.reshape(2, 20, T)),
+        check.first_outside(paths, grip).reshape(2, 20),
+    )
+
+
 def test_map_file_loads_without_pickle(fmap):
     with np.load(DEFAULT_MAP_PATH, allow_pickle=False) as z:
         for key in z.files:

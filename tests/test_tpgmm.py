@@ -393,6 +393,49 @@ def test_objective_never_decreases_and_covariances_stay_spd(p):
     np.testing.assert_allclose(model.weights_.sum(), 1.0)
 
 
+def test_compiled_em_step_is_the_textbook_one():
+    """EM's compiled steps against a direct computation with scipy: the objective is the
+    penalised mean log-likelihood of the standardised data (each frame's Gaussian from
+    scipy.stats), and the M-step's weights, means and covariances are the weighted
+    moments plus the prior's ridge psi I / N_k; an infeasible covariance is refused."""
+    from scipy.special import logsumexp as lse
+    from scipy.stats import multivariate_normal
+
+    from tutor.tpgmm.em import EM, Infeasible
+
+    rng = np.random.default_rng(5)
+    P, N, D, K = 3, 120, 4, 5
+    U = rng.normal(size=(P, N, D))
+    em = EM(U, K, reg_covar=1e-3)
+    resp = rng.dirichlet(np.ones(K), size=N).T  # (K, N)
+    weights, mean, cov = em.m_step(resp)
+    Nk = resp.sum(axis=1)
+    np.testing.assert_allclose(weights, Nk / N, rtol=1e-12)
+    for p in range(P):
+        for k in range(K):
+            mu = resp[k] @ U[p] / Nk[k]
+            dev = U[p] - mu
+            sigma = ((resp[k, :, None] * dev).T @ dev + em.psi * np.eye(D)) / Nk[k]
+            np.testing.assert_allclose(mean[p, k], mu, rtol=1e-10, atol=1e-12)
+            np.testing.assert_allclose(cov[p, k], sigma, rtol=1e-9, atol=1e-12)
+    log_joint = np.log(weights)[:, None] + sum(
+        np.array([multivariate_normal(mean[p, k], cov[p, k]).logpdf(U[p]) for k in range(K)])
+        for p in range(P)
+    )  # (K, N)
+    log_prior = -0.5 * em.psi * sum(np.trace(np.linalg.inv(c)) for c in cov.reshape(-1, D, D))
+    objective, S = em.e_step((weights, mean, cov))
+    assert objective == pytest.approx((lse(log_joint, axis=0).sum() + log_prior) / N, rel=1e-12)
+    # the statistics are the next M-step's: the posterior responsibilities
+    posterior = np.exp(log_joint - lse(log_joint, axis=0))
+    np.testing.assert_allclose(em.params(S)[1], em.m_step(posterior)[1], rtol=1e-9, atol=1e-12)
+    bad = cov.copy()
+    bad[1, 2] = -np.eye(D)
+    with pytest.raises(Infeasible):
+        em.e_step((weights, mean, bad))
+    with pytest.raises(Infeasible):
+        em.params(np.full_like(S, np.nan))
+
+
 def test_random_initialisation_is_reproducible():
     rng = np.random.default_rng(9)
     demos, frames = frame_demos(rng, 3, 2, 2, 40)
