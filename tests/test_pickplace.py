@@ -314,3 +314,66 @@ def test_kinesthetic_bad_input_is_named(pickplace_task, kwargs, words):
 
     with pytest.raises(InvalidParameterError, match=words):
         pickplace_task.demonstrate(**kwargs)
+
+
+def test_compiled_path_facts_are_numpy_s(pickplace_task):
+    """What judge() reads of each path in one compiled pass (below the table or in the
+    tray, grab and release, their distances) against the same in numpy, on random
+    paths with hands that close, reopen, never close or hold NaN."""
+    from tutor.tasks.pickplace import GRAB_LEVEL, _hand_events, _path_facts
+
+    sc = pickplace_task.scene
+    rng = np.random.default_rng(2)
+    B, T = 64, 50
+    traj = rng.uniform([-0.2, -0.6, -0.05, 0], [0.8, 0.6, 0.5, 1], (B, T, 4))
+    traj[:, :, :3] = np.where(rng.uniform(size=(B, T, 1)) < 0.2, sc.tray_center, traj[:, :, :3])
+    traj[::5, :, 3] = 0.2  # never closes
+    traj[1::7, 10:, 3] = 0.9  # closes and stays closed
+    traj[2, 3, 3] = np.nan
+    traj[3, 4, 0] = np.nan
+    points = pickplace_task.test_points[rng.integers(0, 100, B)]
+    half = np.asarray(sc.tray_size, float) / 2
+    bad, grab, release, grab_d, rel_d = _path_facts(
+        traj, points, np.asarray(sc.tray_center, float), half,
+        np.asarray(sc.release_point, float), GRAB_LEVEL,
+    )
+    pos, hand = traj[..., :3], traj[..., 3]
+    in_tray = np.all(np.abs(pos - sc.tray_center) <= half, axis=-1)
+    np.testing.assert_array_equal(bad, (pos[..., 2] < 0) | in_tray)
+    closed = hand >= GRAB_LEVEL
+    want_grab = np.where(closed.any(1), closed.argmax(1), -1)
+    reopened = ~closed & (np.arange(T) > want_grab[:, None]) & (want_grab[:, None] >= 0)
+    want_release = np.where(reopened.any(1), reopened.argmax(1), -1)
+    np.testing.assert_array_equal(grab, want_grab)
+    np.testing.assert_array_equal(release, want_release)
+    rows = np.arange(B)
+    want_gd = np.linalg.norm(pos[rows, np.maximum(want_grab, 0)] - points, axis=1)
+    want_rd = np.linalg.norm(pos[rows, np.maximum(want_release, 0)] - sc.release_point, axis=1)
+    np.testing.assert_array_equal(grab_d, want_gd)  # to the bit: numpy's order of terms
+    np.testing.assert_array_equal(rel_d, want_rd)
+    assert (want_grab == -1).any() and (want_release == -1).any() and (want_release > 0).any()
+    np.testing.assert_array_equal(np.stack(_hand_events(np.ascontiguousarray(hand), GRAB_LEVEL)),
+                                  np.stack([want_grab, want_release]))
+
+
+def test_compiled_falls_back_to_memory_without_a_writable_cache(monkeypatch):
+    """Where numba can write no cache (it then refuses cache=True at decoration), a
+    kernel is compiled in memory instead, with the same result."""
+    import numba
+
+    from tutor import compiled as module
+
+    real = numba.njit
+
+    def refusing(*args, **kwargs):
+        if kwargs.get("cache"):
+            raise RuntimeError("cannot cache function 'f': no locator available for file")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module.numba, "njit", refusing)
+
+    def f(x):
+        return 2 * x + 1
+
+    kernel = module.compiled(f)
+    assert kernel(3) == 7 and hasattr(kernel, "py_func")

@@ -12,9 +12,9 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
-import numba
 import numpy as np
 
+from ..compiled import compiled
 from ..errors import InvalidFileError, InvalidParameterError
 from ..resources import asset
 from .arm import Arm
@@ -561,7 +561,7 @@ class MapCheck(_PathCriterion):
 # one's first failure instead of all of them.
 
 
-@numba.njit(cache=True)
+@compiled
 def _cell(x, y, z, g, origin, spacing, dims, strides, layer):
     """Whether (x, y, z) is on the grid, its cell's flat index (in its hand's layer)
     and its place in the cell."""
@@ -590,7 +590,7 @@ def _cell(x, y, z, g, origin, spacing, dims, strides, layer):
     return True, base, ux - ix, uy - iy, uz - iz
 
 
-@numba.njit(cache=True)
+@compiled
 def _interpolated(flat, base, fx, fy, fz, strides):
     """The trilinear interpolation of the margins in cell ``base`` at (fx, fy, fz)."""
     sx, sy, sz = strides[0], strides[1], strides[2]
@@ -602,7 +602,7 @@ def _interpolated(flat, base, fx, fy, fz, strides):
     return (c00 * gy + c01 * fy) * gx + (c10 * gy + c11 * fy) * fx
 
 
-@numba.njit(cache=True)
+@compiled
 def _in_x(base, fx, fy, fz, flat, sign, strides):
     """An on-grid sample's interpolated margin > 0, interpolating only where its cell's
     corners disagree (:meth:`FeasibilityMap._cell_signs`)."""
@@ -612,7 +612,7 @@ def _in_x(base, fx, fy, fz, flat, sign, strides):
     return _interpolated(flat, base, fx, fy, fz, strides) > 0
 
 
-@numba.njit(cache=True)
+@compiled
 def _values(P, g, origin, spacing, dims, strides, layer, flat, sign):
     out = np.empty(P.shape[0])
     for n in range(P.shape[0]):
@@ -623,7 +623,7 @@ def _values(P, g, origin, spacing, dims, strides, layer, flat, sign):
     return out
 
 
-@numba.njit(cache=True)
+@compiled
 def _positives(P, g, origin, spacing, dims, strides, layer, flat, sign):
     positive = np.zeros(P.shape[0], dtype=np.bool_)
     on_grid = np.zeros(P.shape[0], dtype=np.bool_)
@@ -637,7 +637,7 @@ def _positives(P, g, origin, spacing, dims, strides, layer, flat, sign):
     return positive, on_grid
 
 
-@numba.njit(cache=True)
+@compiled
 def _scan_paths(P, G, known, origin, spacing, dims, strides, layer, flat, sign, shoulder, reach):
     """Per path (B, T): its first sample outside X or known bad (T when none), whether
     an off-grid sample within ``reach`` of ``shoulder`` comes before it (the map cannot

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..compiled import compiled
 from ..errors import InvalidDemoError, InvalidParameterError
 from ..fileio import read_json
 from ..framework.task import Reason, Task, Verdict, control_cost_entry
@@ -352,11 +353,8 @@ class PickPlaceTask(Task):
 
     def _events(self, traj):
         """Grab and release sample indices (B,), -1 when missing."""
-        closed = traj[..., 3] >= GRAB_LEVEL
-        grab = _first(closed)
-        after = closed | (np.arange(closed.shape[-1]) <= grab[:, None])
-        release = np.where(grab >= 0, _first(~after), -1)
-        return grab, release
+        hand = np.ascontiguousarray(np.asarray(traj, float)[..., 3].reshape(-1, np.shape(traj)[-2]))
+        return _hand_events(hand, GRAB_LEVEL)
 
     def criteria_context(self, demos, points) -> dict:
         """delta_g and delta_r: mean demo distance + 2 std + 1 mm (right-plant demos only)."""
@@ -380,23 +378,23 @@ class PickPlaceTask(Task):
         return {"delta_g": rule(grab_d, use_g), "delta_r": rule(rel_d, use_r)}
 
     def judge(self, trajectories, points, context=None) -> Verdict:
-        traj = np.asarray(trajectories, float)
+        traj = np.ascontiguousarray(trajectories, dtype=float)
         ctx = context or {"delta_g": 0.01, "delta_r": 0.02}
         pos = traj[..., :3]
         sc = self.scene
-        below_table = pos[..., 2] < 0.0
-        half = sc.tray_size / 2
-        in_tray = np.all(np.abs(pos - sc.tray_center) <= half, axis=-1)
-        bad = below_table | in_tray
+        bad, grab, release, grab_d, rel_d = _path_facts(
+            traj,
+            np.ascontiguousarray(np.broadcast_to(np.asarray(points, float), (len(traj), 3))),
+            np.asarray(sc.tray_center, float),
+            np.asarray(sc.tray_size, float) / 2,
+            np.asarray(sc.release_point, float),
+            GRAB_LEVEL,
+        )
         n = traj.shape[1]
         if self.feasibility is None:
             first_bad = first_bad_sample(bad)
         else:  # a path is judged by its first failure: the arm is followed up to it
             first_bad = self.feasibility.first_outside(pos, traj[..., 3], known_bad=bad)
-        grab, release = self._events(traj)
-        rows = np.arange(len(traj))
-        grab_d = np.linalg.norm(pos[rows, np.maximum(grab, 0)] - points, axis=1)
-        rel_d = np.linalg.norm(pos[rows, np.maximum(release, 0)] - sc.release_point, axis=1)
         path_ok = first_bad == n
         grab_ok = (grab >= 0) & (grab_d <= ctx["delta_g"])
         rel_ok = (release >= 0) & (rel_d <= ctx["delta_r"])
@@ -406,7 +404,7 @@ class PickPlaceTask(Task):
             parts = []
             if not path_ok[i]:
                 k = int(first_bad[i])
-                kind = "table" if below_table[i, k] else "tray" if in_tray[i, k] else "unreachable"
+                kind = _failure_kind(pos[i, k], sc)
                 parts.append(Reason(kind, k, n))
             if grab[i] < 0:
                 parts.append(Reason("no_grab"))
@@ -474,3 +472,76 @@ class PickPlaceTask(Task):
         if not words:
             return "spread over the tray"
         return f"mostly on the {' '.join(words)} side of the tray (seen from the robot)"
+
+
+# ---------------------------------------------------------------- compiled criteria
+# What judging 100 realisations needs of each path, in one pass per path (numpy's
+# arithmetic, term by term: the same verdicts); the reasons are then worded only for
+# the paths that fail.
+
+
+def _failure_kind(position, scene) -> str:
+    """Why a path's first bad sample at ``position`` (3,) is bad: below the table, in
+    the tray, or (neither) out of the arm's reach or in collision."""
+    if position[2] < 0.0:
+        return "table"
+    if np.all(np.abs(position - scene.tray_center) <= scene.tray_size / 2):
+        return "tray"
+    return "unreachable"
+
+
+@compiled
+def _first_grab_release(hand, level):
+    """The first sample with the hand closed (-1: none) and the first open after it."""
+    T = hand.shape[0]
+    for grab in range(T):
+        if hand[grab] >= level:
+            for release in range(grab + 1, T):
+                if not hand[release] >= level:
+                    return grab, release
+            return grab, -1
+    return -1, -1
+
+
+@compiled
+def _hand_events(hand, level):
+    """Grab and release indices (B,) of hand commands (B, T); -1 when missing."""
+    B = hand.shape[0]
+    grab = np.empty(B, dtype=np.int64)
+    release = np.empty(B, dtype=np.int64)
+    for b in range(B):
+        grab[b], release[b] = _first_grab_release(hand[b], level)
+    return grab, release
+
+
+@compiled
+def _distance(x, y, z, point):
+    dx, dy, dz = x - point[0], y - point[1], z - point[2]
+    return np.sqrt(dx * dx + dy * dy + dz * dz)  # numpy's norm, term by term
+
+
+@compiled
+def _path_facts(traj, points, tray_center, half, release_point, level):
+    """Per path of ``traj`` (B, T, 4): samples below the table or in the tray (B, T),
+    grab and release indices (B,) and their distances to the path's plant and to the
+    release point (B,), taken at sample 0 when the event is missing."""
+    B, T = traj.shape[0], traj.shape[1]
+    bad = np.empty((B, T), dtype=np.bool_)
+    grab = np.empty(B, dtype=np.int64)
+    release = np.empty(B, dtype=np.int64)
+    grab_d = np.empty(B)
+    rel_d = np.empty(B)
+    for b in range(B):
+        for t in range(T):
+            x, y, z = traj[b, t, 0], traj[b, t, 1], traj[b, t, 2]
+            bad[b, t] = z < 0.0 or (
+                abs(x - tray_center[0]) <= half[0]
+                and abs(y - tray_center[1]) <= half[1]
+                and abs(z - tray_center[2]) <= half[2]
+            )
+        g, r = _first_grab_release(traj[b, :, 3], level)
+        grab[b], release[b] = g, r
+        g, r = max(g, 0), max(r, 0)
+        grab_d[b] = _distance(traj[b, g, 0], traj[b, g, 1], traj[b, g, 2], points[b])
+        rel_d[b] = _distance(traj[b, r, 0], traj[b, r, 1], traj[b, r, 2], release_point)
+    return bad, grab, release, grab_d, rel_d

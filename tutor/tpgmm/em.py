@@ -27,9 +27,9 @@ frame, D <= 5) are written out.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from ..compiled import compiled
 from .linalg import LOG_2PI
 
 __all__ = ["EM", "Infeasible"]
@@ -152,7 +152,7 @@ def _contiguous(params):
 # would fail (a covariance that is not positive definite) or statistics are not finite.
 
 
-@numba.njit(cache=True)
+@compiled
 def _params(S, P, D, iu0, iu1, psi, N):
     """M-step: weights (K,), means (P, K, D), covariances (P, K, D, D) and ok."""
     K, F = S.shape
@@ -184,7 +184,7 @@ def _params(S, P, D, iu0, iu1, psi, N):
     return weights, mean, cov, True
 
 
-@numba.njit(cache=True)
+@compiled
 def _joint_weights(weights, mean, cov, iu0, iu1, psi):
     """W (K, F) with ``W @ PhiT`` the log joint, the log prior and ok."""
     P, K, D = mean.shape
@@ -245,7 +245,7 @@ def _joint_weights(weights, mean, cov, iu0, iu1, psi):
     return W, -0.5 * psi * trace, True
 
 
-@numba.njit(cache=True)
+@compiled
 def _e_step(weights, mean, cov, Phi, PhiT, iu0, iu1, psi):
     """Objective (penalised mean log-likelihood), statistics S (K, F) and ok."""
     W, log_prior, ok = _joint_weights(weights, mean, cov, iu0, iu1, psi)
@@ -271,7 +271,7 @@ def _e_step(weights, mean, cov, Phi, PhiT, iu0, iu1, psi):
     return (total_log + log_prior) / N, resp @ Phi, True
 
 
-@numba.njit(cache=True)
+@compiled
 def _run(weights, mean, cov, Phi, PhiT, iu0, iu1, psi, tol, max_iter):
     """SQUAREM-accelerated EM (see :meth:`EM.run`); returns the best parameters,
     objective, n_iter, converged and ok (False: a plain EM step was infeasible)."""
