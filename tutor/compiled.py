@@ -17,9 +17,16 @@ import numba
 __all__ = ["compiled"]
 
 
-def compiled(func):
-    """``numba.njit(cache=True)(func)``, or ``numba.njit(func)`` with no writable cache."""
+def compiled(func=None, *, inline: bool = False):
+    """``numba.njit(cache=True)(func)``, or ``numba.njit(func)`` with no writable cache.
+
+    ``@compiled(inline=True)`` marks a small kernel that other kernels call per element:
+    numba inlines it into each caller, so the caller's loop can vectorise.
+    """
+    if func is None:
+        return lambda f: compiled(f, inline=inline)
+    options = {"inline": "always"} if inline else {}
     try:
-        return numba.njit(cache=True)(func)
+        return numba.njit(cache=True, **options)(func)
     except RuntimeError:  # "cannot cache function ...: no locator available"
-        return numba.njit(func)
+        return numba.njit(**options)(func)

@@ -43,15 +43,10 @@ class EM:
         self.P, self.N, self.D, self.K = P, N, D, K
         self.iu = np.triu_indices(D)
         self.n_quad = len(self.iu[0])
-        quad = U[:, :, self.iu[0]] * U[:, :, self.iu[1]]  # (P, N, Dq)
-        feats = np.concatenate([quad, U], axis=2)  # (P, N, Dq + D)
-        self.Phi = np.ascontiguousarray(
-            np.concatenate([feats.transpose(1, 0, 2).reshape(N, -1), np.ones((N, 1))], axis=1),
-            dtype=float,
-        )  # (N, F)
-        self.PhiT = np.ascontiguousarray(self.Phi.T)  # (F, N): E-step reductions run along N
-        self.psi = float(reg_covar * N / K)
         self._pairs = (self.iu[0].astype(np.int64), self.iu[1].astype(np.int64))
+        # Phi (N, F) and its transpose (F, N), along which the E-step's reductions run
+        self.Phi, self.PhiT = _features(np.ascontiguousarray(U, dtype=float), *self._pairs)
+        self.psi = float(reg_covar * N / K)
 
     def m_step(self, resp: np.ndarray):
         """Parameters from responsibilities ``resp`` (K, N)."""
@@ -150,6 +145,30 @@ def _contiguous(params):
 # ---------------------------------------------------------------- compiled kernels
 # Each returns a flag ``ok`` instead of raising: False where numpy's Cholesky factor
 # would fail (a covariance that is not positive definite) or statistics are not finite.
+
+
+@compiled
+def _features(U, iu0, iu1):
+    """Phi (N, F): each frame's quadratic terms u_i u_j (i <= j), then u, then 1; and Phi.T."""
+    P, N, D = U.shape
+    nq = iu0.shape[0]
+    F = P * (nq + D) + 1
+    PhiT = np.empty((F, N))
+    for p in range(P):
+        base = p * (nq + D)
+        for q in range(nq):
+            i, j = iu0[q], iu1[q]
+            for n in range(N):
+                PhiT[base + q, n] = U[p, n, i] * U[p, n, j]
+        for i in range(D):
+            for n in range(N):
+                PhiT[base + nq + i, n] = U[p, n, i]
+    PhiT[F - 1] = 1.0
+    Phi = np.empty((N, F))
+    for n in range(N):
+        for f in range(F):
+            Phi[n, f] = PhiT[f, n]
+    return Phi, PhiT
 
 
 @compiled
@@ -252,23 +271,88 @@ def _e_step(weights, mean, cov, Phi, PhiT, iu0, iu1, psi):
     if not ok:
         return np.nan, W, False
     resp = W @ PhiT  # (K, N) log joint, made responsibilities in place
-    K, N = resp.shape
+    top = _column_max(resp)
+    total = _exp_gaps(resp, top)
+    N = resp.shape[1]
     total_log = 0.0
     for n in range(N):
-        top = resp[0, n]
-        for k in range(1, K):
-            top = max(top, resp[k, n])
-        total = 0.0
-        for k in range(K):
-            # exp(-100) ~ 4e-44 is already nothing next to the top term (1); clipping
-            # keeps exp and the next product away from subnormal numbers (10x slower)
-            value = np.exp(max(resp[k, n] - top, -100.0))
-            resp[k, n] = value
-            total += value
-        total_log += np.log(total) + top
-        for k in range(K):
-            resp[k, n] /= total
+        total_log += np.log(total[n]) + top[n]
+    _divide_columns(resp, total)
     return (total_log + log_prior) / N, resp @ Phi, True
+
+
+# The E-step's passes over (K, N) run row by row, along memory, each in a kernel of its
+# own: so compiled, their loops vectorise (inlined into _e_step they took twice as long).
+
+
+@compiled
+def _column_max(a):
+    """The largest entry of each column of ``a`` (K, N), taken in row order."""
+    top = a[0].copy()
+    for k in range(1, a.shape[0]):
+        for n in range(a.shape[1]):
+            top[n] = max(top[n], a[k, n])
+    return top
+
+
+@compiled
+def _exp_gaps(resp, top):
+    """resp <- exp(max(resp - top, -100)) in place; returns its column sums."""
+    total = np.zeros(resp.shape[1])
+    for k in range(resp.shape[0]):
+        for n in range(resp.shape[1]):
+            # exp(-100) ~ 4e-44 is already nothing next to the top term (1); clipping
+            # keeps exp and the next product away from subnormal numbers (10x slower),
+            # and keeps _exp's table index in range (a NaN gap is clipped too)
+            gap = resp[k, n] - top[n]
+            value = _exp(gap if gap > -100.0 else -100.0)
+            resp[k, n] = value
+            total[n] += value
+    return total
+
+
+@compiled
+def _divide_columns(a, d):
+    """a[:, n] /= d[n] in place."""
+    for k in range(a.shape[0]):
+        for n in range(a.shape[1]):
+            a[k, n] /= d[n]
+
+
+# exp on [-100, 0] (the E-step's clipped gaps): x = k ln 2 + r with |r| <= ln 2 / 2
+# (Cody and Waite's two-part ln 2, fdlibm's constants, so k ln 2 is exact), exp(r) by
+# its Taylor series to r^13 / 13! (remainder below 1e-17) and 2^k from a table. Within
+# one unit in the last place of the exact value (10 % of values one off, checked
+# against 50-digit decimal arithmetic in tests/test_tpgmm.py); written in plain
+# arithmetic so that the E-step's loop vectorises: three times faster than calling
+# libm's exp per term, and the same bits wherever IEEE arithmetic is.
+_LN2_HI = 6.93147180369123816490e-01
+_LN2_LO = 1.90821492927058770002e-10
+_INV_LN2 = 1.44269504088896338700e00
+_EXP_MIN = -150  # 2^k for k = -150 .. 0, all normal numbers
+_POW2 = np.ldexp(1.0, np.arange(_EXP_MIN, 1))
+
+
+@compiled(inline=True)
+def _exp(x):
+    """exp(x) for x in [-100, 0]."""
+    kf = np.floor(x * _INV_LN2 + 0.5)
+    r = (x - kf * _LN2_HI) - kf * _LN2_LO
+    p = 1.0 / 6227020800.0
+    p = p * r + 1.0 / 479001600.0
+    p = p * r + 1.0 / 39916800.0
+    p = p * r + 1.0 / 3628800.0
+    p = p * r + 1.0 / 362880.0
+    p = p * r + 1.0 / 40320.0
+    p = p * r + 1.0 / 5040.0
+    p = p * r + 1.0 / 720.0
+    p = p * r + 1.0 / 120.0
+    p = p * r + 1.0 / 24.0
+    p = p * r + 1.0 / 6.0
+    p = p * r + 0.5
+    p = p * r + 1.0
+    p = p * r + 1.0
+    return p * _POW2[int(kf) - _EXP_MIN]
 
 
 @compiled
