@@ -393,11 +393,14 @@ def test_objective_never_decreases_and_covariances_stay_spd(p):
     np.testing.assert_allclose(model.weights_.sum(), 1.0)
 
 
-def test_compiled_em_step_is_the_textbook_one():
+@pytest.mark.parametrize("shared", [(), (0,), (0, 3)])
+def test_compiled_em_step_is_the_textbook_one(shared):
     """EM's compiled steps against a direct computation with scipy: the objective is the
     penalised mean log-likelihood of the standardised data (each frame's Gaussian from
     scipy.stats), and the M-step's weights, means and covariances are the weighted
-    moments plus the prior's ridge psi I / N_k; an infeasible covariance is refused."""
+    moments plus the prior's ridge psi I / N_k; an infeasible covariance is refused.
+    With dimensions that are the same in every frame (``shared``, as time is), Phi keeps
+    their features once and the numbers stay the textbook ones."""
     from scipy.special import logsumexp as lse
     from scipy.stats import multivariate_normal
 
@@ -406,7 +409,11 @@ def test_compiled_em_step_is_the_textbook_one():
     rng = np.random.default_rng(5)
     P, N, D, K = 3, 120, 4, 5
     U = rng.normal(size=(P, N, D))
+    for i in shared:
+        U[1:, :, i] = U[0, :, i]
     em = EM(U, K, reg_covar=1e-3)
+    per_frame = len(shared) * (len(shared) + 1) // 2 + len(shared)  # quadratic and linear
+    assert em.Phi.shape == (N, P * (D * (D + 1) // 2 + D) + 1 - (P - 1) * per_frame)
     resp = rng.dirichlet(np.ones(K), size=N).T  # (K, N)
     weights, mean, cov = em.m_step(resp)
     Nk = resp.sum(axis=1)
