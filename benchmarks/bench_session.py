@@ -34,6 +34,7 @@ from tutor.framework import TeachingSession
 from tutor.tasks.maze import MazeTask
 from tutor.tasks.maze_run import MazeRun
 from tutor.tasks.pickplace import PickPlaceTask
+from tutor.workers import one_blas_thread
 
 DEFAULT_OUT = RESULTS / "bench_session.json"
 
@@ -139,6 +140,7 @@ def main(argv=None) -> None:
     parser.add_argument("--sets", type=int, default=5)
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = parser.parse_args(argv)
+    one_blas_thread()  # as the tutor's apps and workers run the learner
     maze = run(args.repeats, args.sets)
     print(
         f"TeachingSession.add_demo on the maze: medians over {args.sets} demo sets "
