@@ -263,18 +263,25 @@ class FeasibilityMap(_PathCriterion):
         return self._positive(points, gripper)[0]
 
     def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
+        # no reach: every off-grid sample is outside X
+        P, _, (first, _, _) = self._scan(paths, gripper, known_bad, np.zeros(3), -1.0)
+        return first.reshape(P.shape[:-2])
+
+    def _scan(self, paths, gripper, known_bad, shoulder, reach):
+        """The checked paths P (..., T, 3) and hands G (..., T), and the compiled scan's
+        (first, redo, first_known) per path, flattened (see _scan_paths)."""
         P, G = check_paths(paths, gripper)
         known = _known_bad(known_bad, P.shape[:-1])
         T = P.shape[-2]
-        first, _, _ = _scan_paths(
+        scan = _scan_paths(
             np.ascontiguousarray(P.reshape(-1, T, 3)),
             np.ascontiguousarray(G.reshape(-1, T)),
             np.ascontiguousarray(known.reshape(-1, T)),
             *self._grid,
-            np.zeros(3),
-            -1.0,  # no reach: every off-grid sample is outside X
+            shoulder,
+            reach,
         )
-        return first.reshape(P.shape[:-2])
+        return P, G, scan
 
     first_outside.__doc__ = _FIRST_DOC.format(how="a lookup.")
 
@@ -530,17 +537,10 @@ class MapCheck(_PathCriterion):
         return in_x, unknown.reshape(off.shape)
 
     def first_outside(self, paths, gripper=None, known_bad=None) -> np.ndarray:
-        P, G = check_paths(paths, gripper)
-        known = _known_bad(known_bad, P.shape[:-1])
-        T = P.shape[-2]
-        first, redo, first_known = _scan_paths(
-            np.ascontiguousarray(P.reshape(-1, T, 3)),
-            np.ascontiguousarray(G.reshape(-1, T)),
-            np.ascontiguousarray(known.reshape(-1, T)),
-            *self.map._grid,
-            self.shoulder,
-            self.reach,
+        P, G, (first, redo, first_known) = self.map._scan(
+            paths, gripper, known_bad, self.shoulder, self.reach
         )
+        T = P.shape[-2]
         # an off-grid sample the arm may reach comes first: follow the path in full,
         # from the start up to its first known-bad sample
         flat_P, flat_G = P.reshape(-1, T, 3), G.reshape(-1, T)
