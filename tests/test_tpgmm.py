@@ -786,3 +786,20 @@ def test_complex_or_text_times_are_refused(simple):
 def test_a_refused_setting_says_what_it_must_be(name, value, words):
     with pytest.raises(InvalidParameterError, match=words):
         TPGMM(**{name: value})
+
+
+@pytest.mark.parametrize("size", [1e160, 1e300])
+def test_coordinates_too_large_to_fit_are_a_named_error(size):
+    """Coordinates whose squares overflow give no model: a named error says so and how
+    to fix it, instead of a model of NaN covariances (what came out before)."""
+    t = np.linspace(0.0, 1.0, 50)
+    demos = [
+        np.column_stack([t, size * np.sin(3 * t + i), size * np.cos(2 * t + i)])
+        for i in range(3)
+    ]
+    frames = [[Frame(np.eye(2), np.zeros(2))] for _ in range(3)]
+    with pytest.raises(InvalidDemoError, match="too large"):
+        TPGMM(3).fit(demos, frames)
+    # large but representable coordinates still fit, to a finite model
+    model = TPGMM(3).fit([d * [1.0, 1e100 / size, 1e100 / size] for d in demos], frames)
+    assert np.all(np.isfinite(model.covariances_)) and np.isfinite(model.lower_bound_)

@@ -21,7 +21,7 @@ from .checks import (
     check_seed,
     check_times,
 )
-from .em import EM
+from .em import EM, Infeasible
 from .frames import FrameBatch, check_frame_row
 from .linalg import LOG_2PI, inv_small, logsumexp, sym
 from .regression import gmr, product_of_frames
@@ -132,25 +132,37 @@ class TPGMM:
                 f"{K} components need at least {K} samples but the demos hold {n_samples}; "
                 "give more or longer demos, or lower n_components"
             )
-        loc, scale = _standardisation(data.local)
+        with np.errstate(over="ignore", invalid="ignore"):
+            loc, scale = _standardisation(data.local)
+        if not (np.all(np.isfinite(scale)) and np.all(np.isfinite(loc))):
+            raise _too_large()
         U = (data.local - loc[:, None, :]) / scale[:, None, :]
         em = EM(U, K, self.reg_covar)
 
-        if self.warm_start and self._is_compatible(data):
-            # a sample is explained if its log density is within two nats per dimension
-            # of the previous fit's mean (both in the new standardised units); one nat
-            # flagged ordinary new demos too and doubled the warm refit's iterations
-            P, D = scale.shape
-            floor = self.lower_bound_ + float(np.log(scale).sum()) - 2 * P * D
-            previous = self._standardised_params(loc, scale)
-            gamma_params = em.m_step(em.warm_responsibilities(previous, floor))
-        else:
-            gamma_params = em.m_step(self._initial_responsibilities(data, U))
-
-        weights, means, covs, lb, n_iter, converged = em.run(gamma_params, self.tol, self.max_iter)
+        try:
+            if self.warm_start and self._is_compatible(data):
+                # a sample is explained if its log density is within two nats per
+                # dimension of the previous fit's mean (both in the new standardised
+                # units); one nat flagged ordinary new demos too and doubled the warm
+                # refit's iterations
+                P, D = scale.shape
+                floor = self.lower_bound_ + float(np.log(scale).sum()) - 2 * P * D
+                previous = self._standardised_params(loc, scale)
+                resp = em.warm_responsibilities(previous, floor)
+            else:
+                resp = self._initial_responsibilities(data, U)
+            weights, means, covs, lb, n_iter, converged = em.run(
+                em.m_step(resp), self.tol, self.max_iter
+            )
+        except Infeasible:  # no valid mixture from the start: only overflowing data does it
+            raise _too_large() from None
+        with np.errstate(over="ignore", invalid="ignore"):
+            covariances = covs * scale[:, None, :, None] * scale[:, None, None, :]
+        if not np.all(np.isfinite(covariances)):
+            raise _too_large()
         self.weights_ = weights
         self.means_ = loc[:, None, :] + means * scale[:, None, :]
-        self.covariances_ = covs * scale[:, None, :, None] * scale[:, None, None, :]
+        self.covariances_ = covariances
         self.lower_bound_ = lb - float(np.log(scale).sum())
         self.n_iter_ = n_iter
         self.converged_ = converged
@@ -287,6 +299,14 @@ class TPGMM:
                 self._gmr_cache.clear()
             self._gmr_cache[key] = cached
         return cached
+
+
+def _too_large() -> InvalidDemoError:
+    return InvalidDemoError(
+        "the demonstrations' coordinates are too large to fit a model to (their squares "
+        "overflow double precision, beyond about 1e150); give them in units where they "
+        "are moderate numbers, e.g. metres or centimetres"
+    )
 
 
 # --- data preparation
