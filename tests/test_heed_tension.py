@@ -12,7 +12,7 @@ import heed_tension  # noqa: E402
 
 
 def test_heed_moves_only_the_conditions_that_show_something(capsys):
-    table = heed_tension.levels(seeds=1)
+    table, held = heed_tension.levels(seeds=1)
     assert set(table.heed) == {label for label, _, _ in heed_tension.HEEDS}
     assert set(table.condition) == {"NF", "VF", "VR", "RF", "BF", "SF"}
     wide = table.pivot_table(index=["experiment", "condition"], columns="heed", values="eta")
@@ -22,6 +22,10 @@ def test_heed_moves_only_the_conditions_that_show_something(capsys):
         assert wide.loc[(experiment, "NF"), bundled] == wide.loc[(experiment, "NF"), heeding]
     # the guided maze teachers are the ones it moves
     assert (wide.loc[1, heeding] != wide.loc[1, bundled]).any()
-    heed_tension.report(table)
+    # Experiment 2's conclusions are counted for each heed, one row per seed
+    assert len(held) == len(heed_tension.HEEDS)
+    assert {"BF best", "BF most undemonstrated", "all hold"} <= set(held.columns)
+    heed_tension.report(table, held)
     out = capsys.readouterr().out
-    assert out.count("Experiment") == 7 and "paper 23.5 %" in out
+    assert out.count("Experiment") == 8 and "paper 23.5 %" in out
+    assert "BF most undemonstrated: " in out and out.count(" of 1") >= 2 * 6
