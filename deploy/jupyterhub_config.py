@@ -40,6 +40,11 @@ What it sets up (deploy/README.md has the how-to):
 - The hub listens on 127.0.0.1:8000 unless ``LFD_HUB_IP`` (e.g. ``0.0.0.0`` to let the
   room's laptops in) and ``LFD_HUB_PORT`` say otherwise. Servers and kernels listen on
   loopback only.
+- The tutor's compiled kernels (numba) are compiled once for the room as the hub starts,
+  into ``LFD_KERNEL_CACHE`` (default: the state folder's name + ``-kernels`` beside it,
+  0755, readable by every trainee, written only by the hub; ``off`` to skip), and each
+  trainee's cache starts as a copy of it, so no trainee's first demo waits about 5 s
+  for numba (numba will not read a cache it cannot write; see ``tutor.compiled``).
 - Behind the hub the 3-D view uses its server-free widget mode (JupyterHub sets
   ``JUPYTERHUB_SERVICE_PREFIX``, which ``tutor.views.scene_page.choose_mode`` reads):
   no Meshcat port is opened per trainee, so no trainee can reach another's scene.
@@ -260,6 +265,47 @@ c.Spawner.ip = "127.0.0.1"
 c.Spawner.http_timeout = 120
 c.Spawner.start_timeout = 180
 
+# ---------------------------------------------------------------- compiled kernels
+
+#: the kernels compiled once for the whole room (numba's cache, readable by every
+#: trainee, written only by the hub); LFD_KERNEL_CACHE=off leaves each trainee to
+#: compile their own on their first demo (about 5 s each)
+_kernels = os.environ.get("LFD_KERNEL_CACHE", "").strip()
+KERNEL_SEED = None if _kernels == "off" else Path(
+    _kernels or STATE_DIR.with_name(f"{STATE_DIR.name}-kernels")
+)
+
+
+def warm_kernel_seed(folder: Path) -> subprocess.Popen:
+    """Compile the tutor's kernels into ``folder`` in the background (``lfd-tutor warm``:
+    about 8 s, a second or two once it is current) and return the process.
+
+    The folder is 0755 and what numba writes in it 0644 (umask 022 for that process
+    only), so trainees may read it but not change it. Each trainee's server gets its
+    own ``NUMBA_CACHE_DIR`` and ``TUTOR_KERNEL_CACHE_SEED`` naming this folder: the tutor
+    copies the kernels in on import (``tutor.compiled.seed_cache``). A trainee whose
+    first demo comes before the hub has finished compiles what is still missing.
+    """
+    try:
+        make_folder(folder, 0o755)
+    except (OSError, SaveError) as exc:
+        sys.exit(
+            f"lfd-tutor hub kit: cannot make the compiled-kernel folder {folder} ({exc}); "
+            "set LFD_KERNEL_CACHE to a folder the hub can write (or to off)"
+        )
+    log = open(STATE_DIR / "kernel-cache.log", "ab")  # noqa: SIM115 (the child keeps it)
+    return subprocess.Popen(
+        [sys.executable, "-m", "tutor", "warm"],
+        env={**os.environ, "NUMBA_CACHE_DIR": str(folder)},
+        stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, umask=0o022,
+    )
+
+
+def trainee_kernel_cache(spawner) -> str:
+    """The trainee's own compiled-kernel cache (in their home), seeded from the room's."""
+    return str(user_home(spawner) / ".cache" / "lfd-tutor-kernels")
+
+
 
 def trainee_folder(spawner) -> Path:
     """The trainee's ``TUTOR_RUNS_DIR``: ``<class folder>/<user name>``."""
@@ -430,6 +476,10 @@ c.Spawner.pre_spawn_hook = pre_spawn_hook
 # callables: '{username}' is NOT expanded inside Spawner.environment values
 c.Spawner.environment = {
     "TUTOR_RUNS_DIR": lambda spawner: str(trainee_folder(spawner)),
+    **({} if KERNEL_SEED is None else {
+        "NUMBA_CACHE_DIR": trainee_kernel_cache,
+        "TUTOR_KERNEL_CACHE_SEED": str(KERNEL_SEED),
+    }),
 }
 
 # ---------------------------------------------------------------- the idle culler
@@ -452,3 +502,6 @@ c.JupyterHub.load_roles = [
         "services": ["idle-culler"],
     }
 ]
+
+# last, once every setting above is taken: the room's kernels, compiled in the background
+WARMING = None if KERNEL_SEED is None else warm_kernel_seed(KERNEL_SEED)

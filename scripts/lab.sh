@@ -14,7 +14,7 @@ fi
 
 # numba's kernels compiled in the background while the lab opens (about 7 s the first
 # time on a machine, cached afterwards), so a trainee's first demo does not wait for them
-"$TUTOR_VENV/bin/python" "$TUTOR_ROOT/scripts/warm_kernels.py" >/dev/null 2>&1 &
+"$TUTOR_VENV/bin/python" -m tutor warm >/dev/null 2>&1 &
 
 exec "$TUTOR_VENV/bin/jupyter" lab \
     --ServerApp.ip=127.0.0.1 \

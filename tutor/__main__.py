@@ -12,6 +12,8 @@ class       read a class's saved runs (a folder with one subfolder or one zip pe
             class of its size.
 calibrate   fit the simulated teachers' population and the maze's blocks to the paper
             by ABC-SMC, check them on the results held out, and write the report.
+warm        compile the learner's and the tasks' kernels once (numba caches them), so a
+            trainee's first demo does not wait for them (scripts/lab.sh, the hub kit).
 
 Examples::
 
@@ -21,6 +23,7 @@ Examples::
     python -m tutor adaptive --seeds 10 --out results_adaptive/
     python -m tutor class /srv/lfd-class --experiment 1 --out class_results/
     python -m tutor calibrate --out calibration/
+    python -m tutor warm
 """
 
 from __future__ import annotations
@@ -235,6 +238,11 @@ def _parser() -> argparse.ArgumentParser:
     cls.add_argument("--scheduler", type=_scheduler, default=None, help=SCHEDULER_HELP)
     cls.add_argument("--no-figures", action="store_true", help="skip the PNG figure")
     cls.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sub.add_parser(
+        "warm",
+        help="compile the kernels once (about 8 s; a second or so when already cached), "
+        "into NUMBA_CACHE_DIR if set",
+    )
     return parser
 
 
@@ -372,7 +380,37 @@ def calibrate_command(args) -> None:
     print("\nwritten: " + ", ".join(str(p) for p in paths.values()))
 
 
-COMMANDS = {"class": class_command, "adaptive": adaptive_command, "calibrate": calibrate_command}
+def warm_command(args) -> None:
+    """Compile every kernel a trainee's demo calls: two demos on each task."""
+    import time
+
+    import numpy as np
+
+    from .framework import TeachingSession
+    from .tasks.maze import MazeTask
+    from .tasks.pickplace import PickPlaceTask
+    from .workers import one_blas_thread
+
+    t0 = time.perf_counter()
+    one_blas_thread()
+    rng = np.random.default_rng(0)
+    maze = MazeTask()
+    session = TeachingSession(maze)
+    for start in maze.test_points[:2]:
+        session.add_demo(maze.layout.reference_path(start, rng), point=start)
+    tray = PickPlaceTask()
+    session = TeachingSession(tray)
+    for plant in (0, 50):
+        session.add_demo(tray.demonstrate(plant, rng), point=tray.test_points[plant])
+    print(f"lfd-tutor: compiled kernels ready ({time.perf_counter() - t0:.1f} s)")
+
+
+COMMANDS = {
+    "class": class_command,
+    "adaptive": adaptive_command,
+    "calibrate": calibrate_command,
+    "warm": warm_command,
+}
 
 
 def main(argv=None) -> int:

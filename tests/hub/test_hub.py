@@ -314,7 +314,8 @@ def assert_loopback_only(hub: Hub, when: str) -> int:
 
 def check_server_environment(hub: Hub, users) -> None:
     """What the kit's callables and hook gave each server: its own class folder, the
-    class plan (written before the servers started), a hub prefix, no headless switch."""
+    class plan (written before the servers started), a hub prefix, no headless switch,
+    its own kernel cache seeded from the room's."""
     servers = hub.server_pids()
     assert set(servers) == set(users), sorted(servers)
     for user, pid in servers.items():
@@ -324,6 +325,9 @@ def check_server_environment(hub: Hub, users) -> None:
         assert env["TUTOR_CLASS_PLAN"] == str(hub.class_dir / "plan.csv")
         assert env["JUPYTERHUB_SERVICE_PREFIX"] == f"/user/{user}/"
         assert "TUTOR_HEADLESS" not in env
+        # the room's compiled kernels (made as the hub started) seed the trainee's own cache
+        assert env["TUTOR_KERNEL_CACHE_SEED"] == str(hub.root / "state-kernels")
+        assert env["NUMBA_CACHE_DIR"] == str(hub.homes / user / ".cache" / "lfd-tutor-kernels")
 
 
 def check_run_files(hub: Hub, expected: dict[str, int]) -> None:

@@ -141,6 +141,12 @@ def load_kit():
     return module
 
 
+@pytest.fixture(autouse=True)
+def no_kernel_warming(monkeypatch):
+    """The kit compiles the room's kernels as it loads; only the test of it asks for that."""
+    monkeypatch.setenv("LFD_KERNEL_CACHE", "off")
+
+
 @pytest.fixture
 def umask_000():
     """The hub started under umask 000 (and the test's own umask back afterwards)."""
@@ -287,6 +293,55 @@ def test_an_educator_admin_joins_the_educators_group(room):
     spawner = room.spawn(educator, admin=True)
     assert educator in grp.getgrnam(room.group).gr_mem
     assert spawner.environment["TUTOR_CLASS_DIR"] == str(room.class_dir)
+
+
+# ---------------------------------------------------------------- compiled kernels
+
+
+def test_trainees_start_from_the_rooms_compiled_kernels_and_cannot_change_them(
+    room, monkeypatch
+):
+    seed = room.root / "srv" / "kernels"
+    monkeypatch.setenv("LFD_KERNEL_CACHE", str(seed))
+    kit = room.load()
+    assert kit.WARMING.wait(timeout=600) == 0, (room.state_dir / "kernel-cache.log").read_text()
+    kernels = sorted(p for p in seed.rglob("*") if p.is_file())
+    assert kernels and all(p.suffix in (".nbi", ".nbc") for p in kernels)
+    # every trainee may read the room's kernels, only the hub (root) may change them
+    assert mode_of(seed) == 0o755 and os.stat(seed).st_uid == 0
+    for p in (seed, *seed.rglob("*")):
+        assert mode_of(p) == (0o755 if p.is_dir() else 0o644), p
+
+    trainee = room.name("k")
+    spawner = room.spawn(trainee)
+    env = {k: v(spawner) if callable(v) else v for k, v in kit.c.Spawner.environment.items()}
+    home = Path(pwd.getpwnam(trainee).pw_dir)
+    own = home / ".cache" / "lfd-tutor-kernels"
+    assert env["NUMBA_CACHE_DIR"] == str(own) and env["TUTOR_KERNEL_CACHE_SEED"] == str(seed)
+
+    def seed_as_trainee():  # what tutor.compiled does on import in the trainee's kernel
+        from tutor.compiled import seed_cache
+
+        return seed_cache(env["TUTOR_KERNEL_CACHE_SEED"], env["NUMBA_CACHE_DIR"])
+
+    assert as_user(trainee, seed_as_trainee) == {"ok": len(kernels)}
+    uid = pwd.getpwnam(trainee).pw_uid
+    assert all(os.stat(p).st_uid == uid for p in own.rglob("*"))
+    assert sorted(p.relative_to(own) for p in own.rglob("*") if p.is_file()) == sorted(
+        p.relative_to(seed) for p in kernels
+    )
+
+    def tamper():  # a trainee cannot plant code in what the room's kernels are copied from
+        (kernels[0].parent / "planted.nbc").write_bytes(b"x")
+
+    assert as_user(trainee, tamper)["error"] == "PermissionError"
+    assert as_user(trainee, lambda: kernels[0].write_bytes(b"x"))["error"] == "PermissionError"
+
+
+def test_the_kit_can_leave_kernels_to_each_trainee(room):
+    kit = room.load()  # LFD_KERNEL_CACHE=off (the fixture)
+    assert kit.WARMING is None and kit.KERNEL_SEED is None
+    assert set(kit.c.Spawner.environment) == {"TUTOR_RUNS_DIR"}
 
 
 # ---------------------------------------------------------------- the settings
