@@ -173,3 +173,24 @@ class Guide:
             self.press_button(9, until=lambda s: s["state"] != "recording")
         else:
             self.page.keyboard.press("Enter")
+
+
+
+#: the plants of a tray map (``.widget-gridbox`` buttons under ``root``) that are not
+#: wholly in sight within the tutor: cut off by a box around them that clips or scrolls
+#: (a map squeezed by the controls beside it scrolls sideways, with no sign that
+#: columns are hidden). Checked without scrolling anything.
+UNREACHABLE_PLANTS = """
+(root) => [...root.querySelectorAll(".widget-gridbox button")].flatMap((button, i) => {
+  const r = button.getBoundingClientRect();
+  for (let box = button.parentElement; box !== null && box !== root.parentElement;
+       box = box.parentElement) {
+    const style = getComputedStyle(box);
+    if (style.overflowX === "visible" && style.overflowY === "visible") continue;
+    const c = box.getBoundingClientRect();
+    if (r.left < c.left - 0.5 || r.right > c.right + 0.5 ||
+        r.top < c.top - 0.5 || r.bottom > c.bottom + 0.5) return [i];
+  }
+  return [];
+})
+"""

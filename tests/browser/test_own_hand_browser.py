@@ -39,7 +39,7 @@ from tests.browser.conftest import (
     watch_errors,
     watch_network,
 )
-from tests.browser.guiding import GAMEPAD, Guide, pickplace_scene
+from tests.browser.guiding import GAMEPAD, UNREACHABLE_PLANTS, Guide, pickplace_scene
 
 pytestmark = pytest.mark.browser
 
@@ -117,6 +117,14 @@ def _start(page, condition: str, trainee: str):
         page.screenshot(path=str(ARTIFACTS / f"own_hand_{trainee}_no_run.png"))
         raise
     assert tutor.get_by_role("button", name="Demonstrate", exact=True).count() == 0
+    # every plant of the map takes a click beside the own hand's wide list of controls,
+    # in a narrow window too (until 2026-12-07 columns 9 and 10 hid behind the list)
+    assert tutor.locator(".widget-gridbox button").count() == 100
+    size = page.viewport_size
+    for width in (1024, size["width"]):
+        page.set_viewport_size({"width": width, "height": size["height"]})
+        time.sleep(0.5)  # JupyterLab lays the page out again
+        assert tutor.evaluate(UNREACHABLE_PLANTS) == [], f"at {width} px wide"
     # no mistake menu: with their own hand, mistakes are the trainee's own
     assert tutor.get_by_label("Mistake", exact=True).count() == 0
     return tutor

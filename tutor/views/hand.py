@@ -231,9 +231,19 @@ def controls_html(hand) -> str:
     rows = []
     for gesture, keys, what in hand.controls:
         shown = _said(html.escape(gesture), keys, lambda key: f"<kbd>{html.escape(key)}</kbd>")
-        rows.append(f"<dt>{shown}</dt><dd>{html.escape(what)}</dd>")
+        rows.append(f"<dt{_CELL}>{shown}</dt><dd{_CELL}>{html.escape(what)}</dd>")
     return (
         f"<div class='lfd-controls' role='group' aria-label='{html.escape(hand.label)}: "
         f"controls'><p><b>{html.escape(hand.label)}</b>. {html.escape(hand.words)}</p>"
-        f"<dl>{''.join(rows)}</dl></div>"
+        f"<dl{_GRID}>{''.join(rows)}</dl></div>"
     )
+
+
+#: the list laid out as two columns, each control beside what it does, whatever the page's
+#: own CSS does to ``dl`` (JupyterLab floats its terms, which a wrapped term then pushes
+#: the rest of the list out of line) and whatever line height the widget gives its text
+_GRID = (
+    " style='display: grid; grid-template-columns: minmax(8em, max-content) 1fr; "
+    "column-gap: 1.5em; row-gap: 0.2em; margin: 0.3em 0; line-height: 1.4'"
+)
+_CELL = " style='float: none; width: auto; margin: 0; padding: 0'"

@@ -192,7 +192,10 @@ class PickPlaceTutor(TutorApp):
                             "row 1, at the top"
                         ),
                         self.tray,
-                    ]
+                    ],
+                    # the map keeps its width (11 cells of 28 px and their gaps): squeezed by
+                    # the controls beside it, it hid columns 9 and 10 behind them
+                    layout=w.Layout(flex="0 0 auto", width=f"{self.tray_map.width_px + 8}px"),
                 ),
                 controls,
             ]

@@ -196,7 +196,11 @@ class PickPlaceExperiment(StartForm):
         self.condition_prompt = w.HTML()
         self.condition_prompt.add_class("lfd-start-condition-prompt")
         self.condition_buttons.observe(lambda _: self._condition_changed(), names="value")
-        self.beyond_note = w.HTML(f"<small>{html.escape(design.beyond_note)}</small>")
+        # its own line height: an HTML widget's is one input row's (28 px), which spaces
+        # small wrapped text twice as wide as it is tall
+        self.beyond_note = w.HTML(
+            f'<div style="font-size: 90%; line-height: 1.4">{html.escape(design.beyond_note)}</div>'
+        )
         self.beyond_note.add_class("lfd-start-beyond")
         self.guided_box = self._hand_field()
         self._follow_plan()

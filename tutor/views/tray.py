@@ -63,6 +63,10 @@ def tray_status(run: PickPlaceRun, reveal: bool = False) -> np.ndarray:
     return status
 
 
+#: a plant button's cell on the tray map and the gap between cells (px)
+CELL_PX, GAP_PX = 28, 2
+
+
 class TrayMap:
     """The plant buttons and their grid.
 
@@ -92,7 +96,10 @@ class TrayMap:
                     "text_color": TRAY_TEXT["unknown"],
                 },
                 layout=w.Layout(
-                    width="26px", height="26px", padding="0", border=UNSELECTED_BORDER
+                    width=f"{CELL_PX - 2}px",
+                    height=f"{CELL_PX - 2}px",
+                    padding="0",
+                    border=UNSELECTED_BORDER,
                 ),
             )
             for i in range(rows * cols)
@@ -105,7 +112,7 @@ class TrayMap:
         """The plant buttons laid out as the 3-D view's default camera sees the tray: row 1
         (nearest the robot) at the top, column 1 (the robot's right) on the left; rows and
         columns are numbered as in the plants' names."""
-        label = {"layout": w.Layout(width="26px", height="26px")}
+        label = {"layout": w.Layout(width=f"{CELL_PX - 2}px", height=f"{CELL_PX - 2}px")}
         cells = [w.HTML("", **label)]
         cells += [w.HTML(f"<center><small>{c + 1}</small></center>", **label) for c in range(cols)]
         for r in range(rows):
@@ -113,8 +120,19 @@ class TrayMap:
             cells += [self.buttons[r * cols + c] for c in range(cols)]
         return w.GridBox(
             cells,
-            layout=w.Layout(grid_template_columns=f"repeat({cols + 1}, 28px)", grid_gap="2px"),
+            layout=w.Layout(
+                grid_template_columns=f"repeat({cols + 1}, {CELL_PX}px)",
+                grid_gap=f"{GAP_PX}px",
+                # never narrower than its cells, however little room the page leaves
+                min_width=f"{self.width_px}px",
+            ),
         )
+
+    @property
+    def width_px(self) -> int:
+        """The grid's width in pixels: a column of row numbers, one column per plant."""
+        cols = self.task.scene.cols
+        return (cols + 1) * CELL_PX + cols * GAP_PX
 
     def draw(self, status, rec, selected: int, hinted: int | None = None) -> None:
         """Colour, glyph and tooltip of every plant; exactly one drawn as selected.
