@@ -294,9 +294,12 @@ def warm_kernel_seed(folder: Path) -> subprocess.Popen:
             "set LFD_KERNEL_CACHE to a folder the hub can write (or to off)"
         )
     log = open(STATE_DIR / "kernel-cache.log", "ab")  # noqa: SIM115 (the child keeps it)
+    # isolated (-I: no current folder, user site or PYTHON* variables on its path) and run
+    # from the hub's own 0700 state folder: as root, nothing a trainee can write is imported
     return subprocess.Popen(
-        [sys.executable, "-m", "tutor", "warm"],
+        [sys.executable, "-I", "-m", "tutor", "warm"],
         env={**os.environ, "NUMBA_CACHE_DIR": str(folder)},
+        cwd=STATE_DIR,
         stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, umask=0o022,
     )
 

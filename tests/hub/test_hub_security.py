@@ -303,8 +303,18 @@ def test_trainees_start_from_the_rooms_compiled_kernels_and_cannot_change_them(
 ):
     seed = room.root / "srv" / "kernels"
     monkeypatch.setenv("LFD_KERNEL_CACHE", str(seed))
+    # a package named tutor where the hub is started: root must never import it
+    planted = room.root / "planted"
+    marker = room.root / "planted-ran"
+    (planted / "tutor").mkdir(parents=True)
+    (planted / "tutor" / "__init__.py").write_text("")
+    (planted / "tutor" / "__main__.py").write_text(
+        f"open({str(marker)!r}, 'w').close()\nraise SystemExit(3)\n"
+    )
+    monkeypatch.chdir(planted)
     kit = room.load()
     assert kit.WARMING.wait(timeout=600) == 0, (room.state_dir / "kernel-cache.log").read_text()
+    assert not marker.exists()
     kernels = sorted(p for p in seed.rglob("*") if p.is_file())
     assert kernels and all(p.suffix in (".nbi", ".nbc") for p in kernels)
     # every trainee may read the room's kernels, only the hub (root) may change them
