@@ -490,12 +490,16 @@ c.Spawner.environment = {
 c.JupyterHub.services = [
     {
         "name": "idle-culler",
+        # isolated (-I) and from the hub's 0700 state folder, as the kernel warm-up: the
+        # hub's user (root) never imports a module from the folder it was started in
         "command": [
             sys.executable,
+            "-I",
             "-m",
             "jupyterhub_idle_culler",
             f"--timeout={env_number('LFD_IDLE_TIMEOUT', 3600, low=1, high=10**7)}",
         ],
+        "cwd": str(STATE_DIR),
     }
 ]
 c.JupyterHub.load_roles = [

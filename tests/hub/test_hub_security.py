@@ -394,6 +394,10 @@ def test_good_settings_are_taken(tmp_path, monkeypatch):
     finally:
         os.umask(old)
     assert (kit.c.JupyterHub.port, kit.c.JupyterHub.ip) == (8123, "0.0.0.0")
+    # the services root starts import nothing from the folder the hub was started in
+    for service in kit.c.JupyterHub.services:
+        if "command" in service:
+            assert service["command"][1] == "-I" and service["cwd"] == str(tmp_path / "state")
 
 
 # ---------------------------------------------------------------- the class analysis
