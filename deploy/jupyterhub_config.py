@@ -69,7 +69,7 @@ import sys
 from pathlib import Path
 
 from tutor.errors import InvalidParameterError, SaveError
-from tutor.fileio import write_json
+from tutor.fileio import check_file_name, write_json
 
 c = get_config()  # noqa: F821 (JupyterHub's config loader provides it)
 
@@ -162,6 +162,18 @@ def env_name(name: str, default: str) -> str:
             "letters, digits, - and _ (starting with a letter, at most 32 characters)"
         )
     return value
+
+
+def env_folder(name: str, default: Path) -> Path:
+    """The environment variable ``name`` as an absolute folder path (``default`` when unset
+    or blank): a relative one is taken from the folder the hub starts in, and a path no
+    file system can hold (a NUL character, a name over 255 bytes) stops the hub."""
+    value = os.environ.get(name, "").strip() or str(default)
+    problem = check_file_name(value)
+    if problem:
+        sys.exit(f"lfd-tutor hub kit: {name} is not a usable folder ({problem}); set it "
+                 "to a folder path such as /srv/lfd-hub-kernels")
+    return Path(os.path.abspath(value))
 
 
 #: the group whose members (the educators' own accounts) read every trainee's folder
@@ -270,9 +282,8 @@ c.Spawner.start_timeout = 180
 #: the kernels compiled once for the whole room (numba's cache, readable by every
 #: trainee, written only by the hub); LFD_KERNEL_CACHE=off leaves each trainee to
 #: compile their own on their first demo (about 5 s each)
-_kernels = os.environ.get("LFD_KERNEL_CACHE", "").strip()
-KERNEL_SEED = None if _kernels == "off" else Path(
-    _kernels or STATE_DIR.with_name(f"{STATE_DIR.name}-kernels")
+KERNEL_SEED = None if os.environ.get("LFD_KERNEL_CACHE", "").strip() == "off" else env_folder(
+    "LFD_KERNEL_CACHE", STATE_DIR.with_name(f"{STATE_DIR.name}-kernels")
 )
 
 

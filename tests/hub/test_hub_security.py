@@ -354,6 +354,16 @@ def test_the_kit_can_leave_kernels_to_each_trainee(room):
     assert set(kit.c.Spawner.environment) == {"TUTOR_RUNS_DIR"}
 
 
+def test_a_relative_kernel_folder_is_made_absolute_for_the_trainees(room, monkeypatch):
+    monkeypatch.chdir(room.root)
+    monkeypatch.setenv("LFD_KERNEL_CACHE", "kernels")
+    kit = room.load()
+    kit.WARMING.wait(timeout=600)
+    # a trainee's server runs elsewhere: the seed it is given must not depend on that
+    assert kit.KERNEL_SEED == room.root / "kernels" and kit.KERNEL_SEED.is_absolute()
+    assert kit.c.Spawner.environment["TUTOR_KERNEL_CACHE_SEED"] == str(room.root / "kernels")
+
+
 # ---------------------------------------------------------------- the settings
 
 
@@ -368,6 +378,7 @@ def test_the_kit_can_leave_kernels_to_each_trainee(room):
         ("LFD_CPU_LIMIT", "nan", "from 0.01 to 1024"),
         ("LFD_IDLE_TIMEOUT", "0", "from 1 to"),
         ("LFD_EDUCATORS_GROUP", "Educators!", "group name"),
+        ("LFD_KERNEL_CACHE", "/srv/" + "k" * 300, "more than the 255 a file name can have"),
     ],
 )
 def test_bad_settings_stop_the_hub_with_a_message(tmp_path, monkeypatch, variable, value, says):

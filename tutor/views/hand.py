@@ -223,6 +223,16 @@ def choose_hand(plan_hand=None, explicit=None) -> str:
     return hand_and_source(plan_hand, explicit)[0]
 
 
+#: the list laid out as two columns, each control beside what it does, whatever the page's
+#: own CSS does to ``dl`` (JupyterLab floats its terms, which a wrapped term then pushes
+#: the rest of the list out of line) and whatever line height the widget gives its text
+_GRID = (
+    " style='display: grid; grid-template-columns: minmax(8em, max-content) 1fr; "
+    "column-gap: 1.5em; row-gap: 0.2em; margin: 0.3em 0; line-height: 1.4'"
+)
+_CELL = " style='float: none; width: auto; margin: 0; padding: 0'"
+
+
 def controls_html(hand) -> str:
     """The controls of ``hand`` (a :class:`Hand` or its code) as an accessible HTML block:
     a ``<dl>`` whose terms are the keys in ``<kbd>`` and whose details say what they do,
@@ -237,13 +247,3 @@ def controls_html(hand) -> str:
         f"controls'><p><b>{html.escape(hand.label)}</b>. {html.escape(hand.words)}</p>"
         f"<dl{_GRID}>{''.join(rows)}</dl></div>"
     )
-
-
-#: the list laid out as two columns, each control beside what it does, whatever the page's
-#: own CSS does to ``dl`` (JupyterLab floats its terms, which a wrapped term then pushes
-#: the rest of the list out of line) and whatever line height the widget gives its text
-_GRID = (
-    " style='display: grid; grid-template-columns: minmax(8em, max-content) 1fr; "
-    "column-gap: 1.5em; row-gap: 0.2em; margin: 0.3em 0; line-height: 1.4'"
-)
-_CELL = " style='float: none; width: auto; margin: 0; padding: 0'"
