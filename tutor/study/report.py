@@ -104,21 +104,23 @@ def analyse(result: CohortResult) -> dict:
     }
     if how.failures:
         out["failures"] = stats.failure_table(runs)
-        out["replication"] = replication_table(runs)
+    out["replication"] = replication_table(runs, exp)
     return out
 
 
-def replication_table(runs: pd.DataFrame, n_boot: int = 2000, seed: int = 0) -> pd.DataFrame:
-    """Replication rates of Experiment 2's conclusions (see :mod:`.replication`).
+def replication_table(runs: pd.DataFrame, experiment: int, n_boot: int = 2000,
+                      seed: int = 0) -> pd.DataFrame:
+    """Replication rates of the experiment's conclusions (see :mod:`.replication`).
 
-    Columns: ``this cohort`` (teachers resampled as simulated), ``paper's means`` (each
-    condition rescaled to the paper's totals first) and ``8 of 10 seeds`` (the chance
-    that a conclusion with the paper-matched rate holds in at least 8 of 10 cohorts).
+    Columns: ``this cohort`` (teachers resampled as simulated), ``paper's levels`` (each
+    condition rescaled to the paper's median eta, or its totals and mean eta, first) and
+    ``8 of 10 seeds`` (the chance that a conclusion with the paper-matched rate holds in
+    at least 8 of 10 cohorts).
     """
-    own = replication.replication_rates(runs, n_boot, seed)
-    matched = replication.replication_rates(runs, n_boot, seed, match_paper=True)
+    own = replication.replication_rates(runs, experiment, n_boot, seed)
+    matched = replication.replication_rates(runs, experiment, n_boot, seed, match_paper=True)
     chance = matched.map(lambda r: replication.chance_of_at_least(8, 10, r))
-    return pd.DataFrame({"this cohort": own, "paper's means": matched, "8 of 10 seeds": chance})
+    return pd.DataFrame({"this cohort": own, "paper's levels": matched, "8 of 10 seeds": chance})
 
 
 def pct(x) -> str:
@@ -215,15 +217,24 @@ def _report_lines2(result: CohortResult, analysis: dict, n: int) -> list[str]:
     both = fail.astype(str) + " (" + ref.astype(str) + ")"
     lines.append("Failures over all teachers and runs: simulation (paper)")
     lines.append(both.to_string())
-    lines.append("")
-    lines.append(
-        "How often each conclusion comes out again with 9 teachers per condition "
-        "(bootstrap over teachers; 'paper's means': conditions rescaled to the paper's "
-        "totals first):"
-    )
-    table = analysis["replication"]
-    lines.append(table.to_string(float_format=lambda v: f"{v:.2f}", na_rep="n/a"))
     return lines
+
+
+#: experiment -> (how many teachers a new study draws, the level the paper gives)
+_REPLICATION_WORDS = {
+    1: ("30 teachers, each keeping their three conditions", "median eta"),
+    2: ("9 teachers per condition, each keeping their three runs", "totals and mean eta"),
+}
+
+
+def _replication_lines(experiment: int, table: pd.DataFrame) -> list[str]:
+    drawn, level = _REPLICATION_WORDS[experiment]
+    return [
+        f"How often each conclusion comes out again in a new study of the paper's size "
+        f"({drawn}, drawn from this cohort; 'paper's levels': each condition rescaled to "
+        f"the paper's {level} first):",
+        table.to_string(float_format=lambda v: f"{v:.2f}", na_rep="n/a"),
+    ]
 
 
 #: experiment number -> its own lines of the plain-text report
@@ -239,6 +250,8 @@ def format_report(result: CohortResult, analysis: dict) -> str:
     lines.append("")
     lines += test_lines(st, exp)
     lines += _REPORT_LINES[exp](result, analysis, n)
+    lines.append("")
+    lines += _replication_lines(exp, analysis["replication"])
     lines.append("")
     lines.append("The paper's conclusions on this cohort:")
     for k, v in analysis["conclusions"].items():
@@ -343,8 +356,8 @@ def _robustness_row(result: CohortResult) -> dict:
         fail = a["failures"]
         for kind in fail.index:
             row.update({f"{kind} {c}": int(fail.loc[kind, c]) for c in fail.columns})
-        matched = a["replication"]["paper's means"]
-        row.update({f"paper-matched rate: {k}": v for k, v in matched.items()})
+    matched = a["replication"]["paper's levels"]
+    row.update({f"paper-matched rate: {k}": v for k, v in matched.items()})
     return row
 
 
@@ -372,8 +385,8 @@ def check_seeds(seeds) -> list[int]:
 
 def robustness_summary(table: pd.DataFrame) -> str:
     """Text under a :func:`robustness` table: seeds where each conclusion holds, and
-    (Experiment 2) the mean paper-matched replication rates with the chance of holding
-    in at least 8 of 10 seeds."""
+    the mean paper-matched replication rates with the chance of holding in at least 8
+    of 10 seeds."""
     held = {c: int(table[c].sum()) for c in table.columns if table[c].dtype == bool}
     lines = [f"seeds where each conclusion holds (of {len(table)}):"]
     lines += [f"  {k}: {v}" for k, v in held.items()]
@@ -381,9 +394,10 @@ def robustness_summary(table: pd.DataFrame) -> str:
     if rates:
         lines += [
             "",
-            "If the conditions' means were the paper's (teachers' spread as simulated),",
-            "how often 9 teachers per condition would find each conclusion, mean over seeds,",
-            "and the chance that it then holds in at least 8 of 10 seeds:",
+            "If each condition's level were the paper's (teachers' relative spread as",
+            "simulated), how often a new study of the paper's size would find each",
+            "conclusion, mean over seeds, and the chance that it then holds in at least",
+            "8 of 10 seeds:",
         ]
     for c in rates:
         known = table[c].dropna()

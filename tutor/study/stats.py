@@ -28,6 +28,7 @@ __all__ = [
     "failure_table",
     "relative_improvement",
     "conclusions",
+    "experiment1_holds",
     "experiment2_ranking",
     "summary_table",
     "describe",
@@ -223,13 +224,39 @@ def _p(pairs: pd.DataFrame, a: str, b: str) -> float:
     return float(hit["p_bonf"].iloc[0]) if len(hit) else float("nan")
 
 
-def _conclusions1(runs: pd.DataFrame, st: dict) -> dict:
-    med, pairs = st["medians"], st["pairwise"]
+def experiment1_holds(medians: dict, p_bonf: dict) -> dict:
+    """Experiment 1's conclusions from its medians and Bonferroni-corrected p values.
+
+    Parameters
+    ----------
+    medians : dict
+        Condition (``NF``, ``VF``, ``VR``) -> median eta: floats, or arrays of one
+        shape (e.g. one entry per bootstrap draw).
+    p_bonf : dict
+        ``(a, b)`` for each of ``("NF", "VF")``, ``("NF", "VR")`` and ``("VF", "VR")``
+        -> the paired t-test's Bonferroni p, of the same shape. NaN (no spread to test)
+        makes every conclusion about that pair false.
+
+    Returns
+    -------
+    dict of bool (ndarray of bool for arrays)
+        ``NF<VF``, ``NF<VR`` (median lower and p < 0.05) and ``VF~VR`` (p >= 0.05).
+    """
+    med = {c: np.asarray(v, dtype=float) for c, v in medians.items()}
+    p = {k: np.asarray(v, dtype=float) for k, v in p_bonf.items()}
     return {
-        "NF<VF": bool(med["NF"] < med["VF"] and _p(pairs, "NF", "VF") < ALPHA),
-        "NF<VR": bool(med["NF"] < med["VR"] and _p(pairs, "NF", "VR") < ALPHA),
-        "VF~VR": bool(_p(pairs, "VF", "VR") >= ALPHA),
+        "NF<VF": (med["NF"] < med["VF"]) & (p["NF", "VF"] < ALPHA),
+        "NF<VR": (med["NF"] < med["VR"]) & (p["NF", "VR"] < ALPHA),
+        "VF~VR": p["VF", "VR"] >= ALPHA,
     }
+
+
+def _conclusions1(runs: pd.DataFrame, st: dict) -> dict:
+    pairs = st["pairwise"]
+    held = experiment1_holds(
+        st["medians"], {(a, b): _p(pairs, a, b) for a, b in paper.EXPERIMENT_1["pairwise_p"]}
+    )
+    return {k: bool(v) for k, v in held.items()}
 
 
 def _conclusions2(runs: pd.DataFrame, st: dict) -> dict:
