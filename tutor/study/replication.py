@@ -15,7 +15,7 @@ recompute the conclusion, repeat ``n_boot`` times: the share of draws in which i
 holds. It estimates the chance that a new study of the paper's size, drawn from the
 same population, finds it.
 
-**Against the paper's means.** ``match_paper=True`` first rescales every condition's
+**Against the paper's levels.** ``match_paper=True`` first rescales every condition's
 teachers so that the condition's summary equals the paper's, keeping the relative
 spread between teachers that the simulation shows: in Experiment 2 the total (errors,
 undemonstrated states, ambiguous demos) or mean (eta), in Experiment 1 the median eta
