@@ -239,6 +239,8 @@ def test_headless_scene_is_static_without_a_server(pickplace_task, monkeypatch, 
     paths = {c.get("path") for c in commands}
     assert "/meshcat/robot/visuals/panda_link0_0" in paths
     assert sum(p.startswith("/meshcat/lfd/plants/") and p.endswith("/ball") for p in paths) == 100
+    # the 100 stems are one mesh (one draw call), not 100
+    assert "/meshcat/lfd/stems" in paths and not any(p.endswith("/stem") for p in paths)
     view = scene.widget.children[1]
     assert "MeshCat.Viewer" in view.page and 'scene-data">' not in view.page  # no scene in it
 
@@ -631,3 +633,24 @@ def test_the_3d_view_shows_what_the_tray_shows(pickplace_task):
         scene.update(run, tray_status(run))
         drawn = len(scene._trails.get("passed", [])) + len(scene._trails.get("failed", []))
         assert drawn == 100
+
+
+def test_the_stems_are_one_mesh_standing_on_each_plant(pickplace_task):
+    from tutor.views.scene_meshes import PLANT_STEM_SEGMENTS, stem_mesh
+
+    sc = pickplace_task.scene
+    V, F, N = stem_mesh(sc)
+    k = len(sc.plant_positions)
+    assert V.shape == N.shape and V.shape[1] == 3 and F.shape[1] == 3
+    assert F.max() == len(V) - 1 and F.min() == 0
+    per = len(V) // k  # each stem's vertices, in plant order
+    stems = V.reshape(k, per, 3)
+    bases = np.asarray(sc.plant_positions, dtype=float)[:, :2]
+    # every vertex within the stem's radius of its own plant, from the tray to the plant top
+    off = np.linalg.norm(stems[..., :2] - bases[:, None], axis=2)
+    assert off.max() <= 0.5 * sc.plant_radius + 1e-6
+    assert np.allclose(stems[..., 2].min(axis=1), sc.tray_top, atol=1e-6)
+    assert np.allclose(stems[..., 2].max(axis=1), sc.tray_top + sc.plant_height, atol=1e-6)
+    # a closed 8-sided cylinder per plant: its sides and two caps, lit by unit normals
+    assert len(F) == k * 4 * PLANT_STEM_SEGMENTS
+    assert np.allclose(np.linalg.norm(N, axis=1), 1.0, atol=1e-5)

@@ -31,6 +31,7 @@ __all__ = [
     "draw_fixtures",
     "draw_hand",
     "plant_ball",
+    "stem_mesh",
     "hex_colour",
     "HAND_OPEN",
     "HAND_CLOSED",
@@ -167,7 +168,7 @@ def robot_meshes(name: str = "panda") -> RobotMeshes:
 
 
 def draw_fixtures(vis, scene) -> None:
-    """Draw what never moves under ``lfd/``: table, tray, bin and a stem per plant.
+    """Draw what never moves under ``lfd/``: table, tray, bin and the plants' stems.
 
     Parameters
     ----------
@@ -185,19 +186,42 @@ def draw_fixtures(vis, scene) -> None:
         colour = colours.get(name, BIN)
         vis[node].set_object(mg.Box(list(size)), mg.MeshLambertMaterial(color=hex_colour(colour)))
         vis[node].set_transform(tf.translation_matrix(center))
-    upright = tf.rotation_matrix(np.pi / 2, [1, 0, 0])  # meshcat cylinders run along y
-    stem = scene.plant_height
-    for i, p in enumerate(scene.plant_positions):
-        base = np.array([p[0], p[1], scene.tray_top])
-        node = vis[f"lfd/plants/{i}"]
-        node.set_transform(tf.translation_matrix(base))
-        node["stem"].set_object(
-            segmented(
-                mg.Cylinder(stem, 0.5 * scene.plant_radius), radialSegments=PLANT_STEM_SEGMENTS
-            ),
-            mg.MeshLambertMaterial(color=hex_colour(STEM)),
+    V, F, N = stem_mesh(scene)
+    vis["lfd/stems"].set_object(
+        _with_normals(mg.TriangularMeshGeometry(V, F), N),
+        mg.MeshLambertMaterial(color=hex_colour(STEM)),
+    )
+    for i, p in enumerate(scene.plant_positions):  # each plant's ball is drawn here
+        vis[f"lfd/plants/{i}"].set_transform(
+            tf.translation_matrix([p[0], p[1], scene.tray_top])
         )
-        node["stem"].set_transform(tf.translation_matrix([0, 0, stem / 2]) @ upright)
+
+
+def stem_mesh(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The 100 plants' stems as one mesh: ``(vertices (n, 3), faces (m, 3), normals (n, 3))``.
+
+    One mesh is one draw call. On software GL (headless chromium, a machine without a GPU)
+    each draw call costs about 0.1 ms whatever its size, and the 100 plants as 200 meshes
+    were two thirds of a frame (22 of 30 ms, 2026-12-07). The stems never move, so they are
+    drawn together; each ball stays its own mesh, coloured by the plant's status.
+    """
+    import trimesh
+
+    stem = trimesh.creation.cylinder(
+        radius=0.5 * scene.plant_radius, height=scene.plant_height,
+        sections=PLANT_STEM_SEGMENTS,
+    )
+    stem.apply_translation([0.0, 0.0, scene.plant_height / 2])  # standing on the tray
+    V, F, N = stem.vertices, stem.faces, stem.vertex_normals
+    bases = np.column_stack(
+        [np.asarray(scene.plant_positions, dtype=float)[:, :2],
+         np.full(len(scene.plant_positions), scene.tray_top)]
+    )  # (k, 3)
+    k, n = len(bases), len(V)
+    vertices = (V[None] + bases[:, None]).reshape(-1, 3)
+    faces = (F[None] + n * np.arange(k)[:, None, None]).reshape(-1, 3)
+    normals = np.tile(N, (k, 1))
+    return (vertices.astype(np.float32), faces.astype(np.uint32), normals.astype(np.float32))
 
 
 def plant_ball(scene):
