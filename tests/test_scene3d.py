@@ -237,7 +237,7 @@ def test_headless_scene_is_static_without_a_server(pickplace_task, monkeypatch, 
     assert "MeshCat.Viewer" in text and "<iframe" not in text
     commands = _scene_commands(text)
     paths = {c.get("path") for c in commands}
-    assert "/meshcat/robot/visuals/panda_link0_0" in paths
+    assert "/meshcat/robot/visuals/panda_link0_0/mesh" in paths  # one mesh a link
     assert sum(p.startswith("/meshcat/lfd/plants/") and p.endswith("/ball") for p in paths) == 100
     # the 100 stems are one mesh (one draw call), not 100
     assert "/meshcat/lfd/stems" in paths and not any(p.endswith("/stem") for p in paths)
@@ -654,3 +654,14 @@ def test_the_stems_are_one_mesh_standing_on_each_plant(pickplace_task):
     # a closed 8-sided cylinder per plant: its sides and two caps, lit by unit normals
     assert len(F) == k * 4 * PLANT_STEM_SEGMENTS
     assert np.allclose(np.linalg.norm(N, axis=1), 1.0, atol=1e-5)
+
+
+def test_each_robot_link_is_one_mesh_with_its_parts_colours():
+    from tutor.views.scene_meshes import merged_parts
+
+    a = (np.zeros((3, 3), np.float32), np.array([[0, 1, 2]]), np.ones((3, 3)), "#ff0000")
+    b = (np.ones((4, 3), np.float32), np.array([[0, 1, 2], [1, 2, 3]]), np.ones((4, 3)), "#0080ff")
+    V, F, N, C = merged_parts([a, b])
+    assert V.shape == (7, 3) and N.shape == (7, 3) and C.shape == (7, 3)
+    assert F.tolist() == [[0, 1, 2], [3, 4, 5], [4, 5, 6]]  # the second part's faces moved on
+    assert np.allclose(C[:3], [1, 0, 0]) and np.allclose(C[3:], [0, 128 / 255, 1])
