@@ -96,10 +96,21 @@ def test_notebook_viewer_updates_without_resetting_the_camera(page, voila_scene,
         raise
     frame = view.locator("iframe").content_frame
     body = frame.locator("body")
-    n_meshes = body.evaluate(
-        "() => { let n = 0; viewer.scene.traverse(o => { if (o.isMesh) n++; }); return n; }"
+    # the meshes drawn, by the node above them: 100 balls (one per plant, recoloured by
+    # status), the 100 stems as one mesh, each of the Panda's 11 links as one mesh
+    meshes = body.evaluate(
+        """() => { const out = {};
+            viewer.scene.traverse(o => {
+                if (!o.isMesh) return;
+                const names = []; for (let p = o.parent; p; p = p.parent) names.push(p.name);
+                const key = names.includes("plants") ? "balls" : names.includes("stems")
+                    ? "stems" : names.includes("visuals") ? "links" : "other";
+                out[key] = (out[key] || 0) + 1;
+            });
+            return out; }"""
     )
-    assert n_meshes > 200  # table, tray, bin, 100 stems and balls, the Panda's links
+    assert meshes["balls"] == 100 and meshes["stems"] == 1 and meshes["links"] == 11
+    assert meshes["other"] >= 3  # table, tray, bin (and the hand)
     box = view.bounding_box()
     cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
     page.mouse.move(cx, cy)
