@@ -136,9 +136,10 @@ def merged_parts(parts) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
     vertices = np.concatenate([V for V, _, _, _ in parts])
     faces = np.concatenate([F + o for (_, F, _, _), o in zip(parts, offsets, strict=True)])
     normals = np.concatenate([N for _, _, N, _ in parts])
+    rgb = [hex_colour(c).to_bytes(3, "big") for _, _, _, c in parts]  # "#rrggbb" -> bytes
     colours = np.concatenate([
-        np.tile(np.array([int(c[i : i + 2], 16) for i in (1, 3, 5)]) / 255.0, (len(V), 1))
-        for V, _, _, c in parts
+        np.tile(np.frombuffer(b, np.uint8) / 255.0, (len(V), 1))
+        for (V, _, _, _), b in zip(parts, rgb, strict=True)
     ])
     return (vertices.astype(np.float32), faces.astype(np.uint32), normals.astype(np.float32),
             colours.astype(np.float32))
