@@ -183,6 +183,29 @@ def _run_tutor(form, run: int = 1):
     return form.locator(TUTOR).filter(has_text=re.compile(rf"\brun {run}\b")).first
 
 
+def _wait_for_run(form, run: int, artifacts, shot: str):
+    """Run ``run``'s tutor once shown; on a timeout, a screenshot of the form and an
+    assertion that says what the form and its cell showed instead (its note, the runs
+    it shows, any stderr of the cell such as the server's IOPub rate message)."""
+    tutor = _run_tutor(form, run)
+    try:
+        tutor.wait_for(timeout=60_000)
+    except Exception as exc:
+        form.screenshot(path=str(artifacts / f"trainee_{shot}_run{run}_timeout.png"))
+        note = form.locator(".lfd-start-note").all_inner_texts()
+        shown = [
+            next((line for line in t.splitlines() if "Condition" in line), t[:200])
+            for t in form.locator(TUTOR).all_inner_texts()
+        ]
+        cell = form.locator("xpath=ancestor::div[contains(@class, 'jp-Cell')][1]")
+        stderr = cell.locator("[data-mime-type='application/vnd.jupyter.stderr']")
+        raise AssertionError(
+            f"run {run} was not shown within 60 s ({type(exc).__name__}); the form's note: "
+            f"{note}; its runs: {shown}; the cell's stderr: {stderr.all_inner_texts()}"
+        ) from exc
+    return tutor
+
+
 def _start(page, form, condition: str, trainee: str, artifacts, shot: str):
     """Choose ``condition`` (unless the educator set it), type the name, press Start."""
     form.scroll_into_view_if_needed()
@@ -202,8 +225,7 @@ def _start(page, form, condition: str, trainee: str, artifacts, shot: str):
     page.keyboard.type(trainee)
     form.screenshot(path=str(artifacts / f"trainee_{shot}_1_form.png"))
     form.locator(".lfd-start-go").click()
-    tutor = _run_tutor(form)
-    tutor.wait_for(timeout=60_000)
+    tutor = _wait_for_run(form, 1, artifacts, shot)
     text = tutor.inner_text()
     assert f"Condition {condition}" in text and "demonstrations: 0" in text
     assert trainee in text  # the run is recorded under the typed name
@@ -326,7 +348,7 @@ def test_condition_shows_only_its_r(pickplace_page, artifacts, condition):
     assert text.count("the best possible η") == 1, text
     assert "Run over." in text and "efficacy ε" in text
     # run 2 appears under run 1, as the paper ran them
-    _run_tutor(_form(page, condition), 2).wait_for(timeout=60_000)
+    _wait_for_run(_form(page, condition), 2, artifacts, shot)
 
 
 def test_exactly_one_plant_highlighted(pickplace_page, artifacts):
