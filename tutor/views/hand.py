@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 from ..errors import InvalidParameterError
 from ..runtime import env_text
+from .style import PROSE
 
 __all__ = [
     "Hand",
@@ -59,7 +60,8 @@ class Hand:
     label : str
         What the trainee reads, e.g. "Guide the arm yourself".
     words : str
-        One sentence for the trainee: who moves the arm and how.
+        What the trainee does, in a sentence or two; shown after the label (so it does
+        not say the label again).
     trainee_moves : bool
         The trainee moves the arm in the 3-D view (the own hand); otherwise the tutor
         moves it to the plant the trainee clicked (the guided hand).
@@ -103,9 +105,8 @@ HANDS = {
         code="own",
         label="Guide the arm yourself",
         words=(
-            "You guide the arm yourself: select a plant, press Guide the arm, move the "
-            "gripper to the plant, close the hand on it, carry it to the bin, open the hand "
-            "and press Enter."
+            "Select a plant, press Guide the arm, move the gripper to the plant, close the "
+            "hand on it, carry it to the bin, open the hand and press Enter."
         ),
         trainee_moves=True,
         mistake_menu=False,
@@ -129,8 +130,8 @@ HANDS = {
         code="guided",
         label="The tutor guides the arm for you",
         words=(
-            "The tutor guides the arm for you: select a plant and press Demonstrate, and "
-            "the arm is moved to it as a person would move it."
+            "Select a plant and press Demonstrate: the arm is moved to it, and on to the "
+            "bin, as a person would move it."
         ),
         trainee_moves=False,
         mistake_menu=True,
@@ -228,7 +229,7 @@ def choose_hand(plan_hand=None, explicit=None) -> str:
 #: the rest of the list out of line) and whatever line height the widget gives its text
 _GRID = (
     " style='display: grid; grid-template-columns: minmax(8em, max-content) 1fr; "
-    "column-gap: 1.5em; row-gap: 0.2em; margin: 0.3em 0; line-height: 1.4'"
+    f"column-gap: 1.5em; row-gap: 0.2em; margin: 0.3em 0; {PROSE}'"
 )
 _CELL = " style='float: none; width: auto; margin: 0; padding: 0'"
 

@@ -32,6 +32,7 @@ from ..tasks.maze_run import MazeRun
 from ..tasks.optimal_reference import optimal_reference
 from .app import TutorApp, guarded
 from .sketchpad import Sketchpad, layout_spec
+from .style import prose
 from .text import compose, finish_summary, optimal_sentence
 
 __all__ = ["MazeTutor", "PAPER_MEDIAN_ETA", "compare_runs", "plot_runs"]
@@ -185,7 +186,7 @@ class MazeTutor(TutorApp):
         self.pad.enabled = not self.finished and not self.read_only
         for name in ("Undo", "Reset", "Finish", "Save"):
             self.buttons[name].disabled = self.read_only
-        self.panel.value = self._panel_html(vis)
+        self.panel.value = prose(self._panel_html(vis))
         self._refresh_common()
 
     def _panel_html(self, vis) -> str:

@@ -50,6 +50,7 @@ from ..tasks.recording import steady_hand
 from .app import TutorApp, guarded
 from .hand import HANDS, choose_hand, controls_html
 from .pickplace_files import plant_items
+from .style import prose
 from .text import compose, finish_summary, hint_sentence, optimal_sentence
 from .tray import STATUS_WORDS, TrayMap, set_trait, tray_status
 
@@ -499,7 +500,7 @@ class PickPlaceTutor(TutorApp):
                 f"<div class='lfd-cap' role='status'>{html.escape(timing.cap_message())}</div>"
             )
         parts.append(self.message_html())
-        self.panel.value = "".join(parts)
+        self.panel.value = prose("".join(parts))
         self._refresh_common()
         if self.guiding:  # a file loaded mid-guide would interleave two demonstrations
             self.upload.disabled = True

@@ -62,6 +62,7 @@ from ..runtime import (
     trainee_key,
 )
 from ..tasks.maze_run import PHASE_ORDER
+from .style import prose
 from .worked_example import instruction_widget
 
 __all__ = [
@@ -154,6 +155,7 @@ class StartForm:
         self.confirm.add_class("lfd-start-confirm")
         self.confirm.on_click(lambda _: self._safely(self.start))
         self.note = w.HTML()
+        self._note_lines: list[str] = []  # the note's lines (HTML)
         self.note.add_class("lfd-start-note")
         self.results_box = w.Output()
         self.results_box.add_class("lfd-start-results")
@@ -196,7 +198,16 @@ class StartForm:
         return [self._name_note] if self._name_note else []
 
     def _show_notes(self) -> None:
-        self.note.value = "<br>".join(html.escape(n, quote=False) for n in self._notes())
+        self._note_lines = [html.escape(n, quote=False) for n in self._notes()]
+        self._render_note()
+
+    def _render_note(self) -> None:
+        self.note.value = prose("<br>".join(self._note_lines)) if self._note_lines else ""
+
+    def add_note(self, text: str) -> None:
+        """Add a line to what the note under the form says."""
+        self._note_lines.append(html.escape(text, quote=False))
+        self._render_note()
 
     def _name_changed(self) -> None:
         """The trainee typed in the name field (before Start: Experiment 2's plan follows)."""
@@ -243,7 +254,8 @@ class StartForm:
     def _say(self, text: str, problem: bool = False) -> None:
         self.problem = text if problem else None
         style = ' style="color:#b00020"' if problem else ""
-        self.note.value = f"<span{style}>{html.escape(text, quote=False)}</span>"
+        self._note_lines = [f"<span{style}>{html.escape(text, quote=False)}</span>"]
+        self._render_note()
 
     def start(self) -> None:
         """What Start does: check the name, then show the first run that is not finished.

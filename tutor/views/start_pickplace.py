@@ -56,6 +56,7 @@ from ..runtime import env_text, headless, runs_root, trainee_key
 from ..tasks.pickplace_protocol import RUNS, PickPlaceRun
 from .hand import HAND_SOURCES, HANDS, hand_and_source
 from .start import HEADLESS_TRAINEE, StartForm
+from .style import PROSE
 from .worked_example import instruction_widget
 
 __all__ = [
@@ -196,10 +197,8 @@ class PickPlaceExperiment(StartForm):
         self.condition_prompt = w.HTML()
         self.condition_prompt.add_class("lfd-start-condition-prompt")
         self.condition_buttons.observe(lambda _: self._condition_changed(), names="value")
-        # its own line height: an HTML widget's is one input row's (28 px), which spaces
-        # small wrapped text twice as wide as it is tall
         self.beyond_note = w.HTML(
-            f'<div style="font-size: 90%; line-height: 1.4">{html.escape(design.beyond_note)}</div>'
+            f'<div style="font-size: 90%; {PROSE}">{html.escape(design.beyond_note)}</div>'
         )
         self.beyond_note.add_class("lfd-start-beyond")
         self.guided_box = self._hand_field()
@@ -391,8 +390,8 @@ class PickPlaceExperiment(StartForm):
         if self.trainee is None:
             return
         if self.carried_on:
-            self.note.value += f"<br>{html.escape(self.carried_on, quote=False)}"
-        self.note.value += f"<br>{html.escape(self.hand_line(), quote=False)}"
+            self.add_note(self.carried_on)
+        self.add_note(self.hand_line())
 
     def _lock_form(self) -> None:
         # settled before the first run is made, so that a later change asks for nothing

@@ -24,8 +24,6 @@ unknown (not evaluated)   grey            dot
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
-
 __all__ = [
     "PASS",
     "FAIL",
@@ -43,6 +41,8 @@ __all__ = [
     "TARGET",
     "RULE",
     "new_axes",
+    "PROSE",
+    "prose",
 ]
 
 PASS = "#53a846"  #: realisation in B (meets the criteria), covered test point
@@ -52,6 +52,16 @@ DEMO = "#013ad1"  #: the teacher's demonstrations b
 INCORRECT = "#821652"  #: incorrect demonstration marker
 AMBIGUOUS = "#eed12c"  #: ambiguous demonstration marker
 UNKNOWN = "#aaaaaa"  #: not evaluated yet (e.g. a plant before the first demo)
+
+#: the line height of the tutors' text. An ipywidgets HTML widget gives its text the
+#: height of one input row (28 px), which spaces a wrapped paragraph a line apart
+PROSE = "line-height: 1.4"
+
+
+def prose(inner: str) -> str:
+    """``inner`` (HTML) in a block with :data:`PROSE`'s line height."""
+    return f'<div style="{PROSE}">{inner}</div>'
+
 
 #: every status by name, as the palette test and the browser views read them
 STATUS_COLOURS = {
@@ -87,5 +97,7 @@ RULE = "#e69f00"  #: VR's rule circle (orange, dashed): where the next demo shou
 def new_axes(ax=None, figsize=(5.0, 4.0)):
     """Return ``ax``, or the Axes of a new figure of ``figsize`` inches when it is None."""
     if ax is None:
+        import matplotlib.pyplot as plt
+
         _, ax = plt.subplots(figsize=figsize)
     return ax
