@@ -29,6 +29,7 @@ from tutor.views.meshcat_server import (
 )
 from tutor.views.pickplace_app import PickPlaceTutor, tray_status
 from tutor.views.scene3d import STATUS_COLOURS, Scene3D, SceneRecorder, choose_mode
+from tutor.views.scene_meshes import hex_string
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -120,6 +121,14 @@ def _scene_commands(html_text: str) -> list[dict]:
             out.append(umsgpack.unpackb(raw[i + 4 : i + 4 + n]))
             i += 4 + n
     return out
+
+
+def _instance_colours(obj: dict) -> np.ndarray:
+    """An instanced mesh's colours (count, 3) as sent (a Float32Array's bytes)."""
+    assert obj["type"] == "InstancedMesh" and obj["frustumCulled"] is False
+    rgb = np.frombuffer(obj["instanceColor"]["array"].data, dtype=np.float32).reshape(-1, 3)
+    assert len(rgb) == obj["count"] and obj["instanceColor"]["itemSize"] == 3
+    return rgb
 
 
 # --------------------------------------------------------------------------- the server
@@ -238,7 +247,8 @@ def test_headless_scene_is_static_without_a_server(pickplace_task, monkeypatch, 
     commands = _scene_commands(text)
     paths = {c.get("path") for c in commands}
     assert "/meshcat/robot/visuals/panda_link0_0/mesh" in paths  # one mesh a link
-    assert sum(p.startswith("/meshcat/lfd/plants/") and p.endswith("/ball") for p in paths) == 100
+    # the 100 balls are one instanced mesh (one draw call)
+    assert "/meshcat/lfd/balls" in paths and not any("/plants/" in p for p in paths)
     # the 100 stems are one mesh (one draw call), not 100
     assert "/meshcat/lfd/stems" in paths and not any(p.endswith("/stem") for p in paths)
     view = scene.widget.children[1]
@@ -362,14 +372,14 @@ def test_tutor_updates_the_scene(pickplace_task):
     tutor.demonstrate(12)
     status = tray_status(tutor.run)
     assert "plant (2, 3)" in scene.animation.label  # the replay of the demonstrated plant
-    balls = {
-        c["path"]: c
+    (balls,) = [
+        c["object"]["object"]
         for c in _scene_commands(scene.static_html())
-        if c["type"] == "set_object" and c["path"].endswith("/ball")
-    }
+        if c["type"] == "set_object" and c["path"] == "/meshcat/lfd/balls"
+    ]
+    rgb = _instance_colours(balls)
     for i in (12, 0, 99):
-        colour = balls[f"/meshcat/lfd/plants/{i}/ball"]["object"]["materials"][0]["color"]
-        assert colour == int(STATUS_COLOURS[status[i]].lstrip("#"), 16)
+        assert hex_string(np.round(rgb[i] * 255)) == STATUS_COLOURS[status[i]]
     # selecting another plant changes nothing in 3-D (no replay, nothing sent)
     sent = _open_view(scene)
     tutor.select(3)
@@ -488,9 +498,13 @@ def test_notebook_viewer_gets_the_scene_once_then_changes(pickplace_task):
     scene.set_status(status)
     scene.refresh()
     (update, buffers) = sent.pop()
-    assert update == {"type": "update"} and len(buffers) == 1 and len(buffers[0]) < 5000
-    changed = {c["path"] for c in _frames(buffers[0]) if c["type"] == "set_object"}
-    assert changed == {"/meshcat/lfd/plants/3/ball", "/meshcat/lfd/plants/4/ball"}
+    assert update == {"type": "update"} and len(buffers) == 1 and len(buffers[0]) < 12_000
+    changed = [c for c in _frames(buffers[0]) if c["type"] == "set_object"]
+    assert [c["path"] for c in changed] == ["/meshcat/lfd/balls"]  # one object, all colours
+    rgb = _instance_colours(changed[0]["object"]["object"])
+    assert [hex_string(np.round(c * 255)) for c in rgb[[3, 4, 5]]] == [
+        STATUS_COLOURS["pass"], STATUS_COLOURS["pass"], STATUS_COLOURS["unknown"]
+    ]
     scene.refresh()
     assert sent == []  # nothing new, nothing sent
 
@@ -510,7 +524,7 @@ def test_live_scene_streams_to_the_loopback_server(pickplace_task):
     socket.send_multipart([b"get_scene", scene.scene_id.encode()])
     served = socket.recv().decode()
     paths = {c.get("path") for c in _server_commands(served)}
-    assert "/meshcat/lfd/plants/0/ball" in paths and "/meshcat/lfd/table" in paths
+    assert "/meshcat/lfd/balls" in paths and "/meshcat/lfd/table" in paths
 
 
 def _server_commands(html_text: str) -> list[dict]:
@@ -665,3 +679,29 @@ def test_each_robot_link_is_one_mesh_with_its_parts_colours():
     assert V.shape == (7, 3) and N.shape == (7, 3) and C.shape == (7, 3)
     assert F.tolist() == [[0, 1, 2], [3, 4, 5], [4, 5, 6]]  # the second part's faces moved on
     assert np.allclose(C[:3], [1, 0, 0]) and np.allclose(C[3:], [0, 128 / 255, 1])
+
+
+def test_the_balls_are_one_instanced_mesh_on_top_of_each_stem(pickplace_task):
+    from tutor.views.scene_meshes import plant_balls
+
+    sc = pickplace_task.scene
+    k = len(sc.plant_positions)
+    colours = ["#ff0000"] * k
+    colours[7] = "#0080ff"
+    data = plant_balls(sc, colours).lower()
+    obj = data["object"]
+    assert obj["type"] == "InstancedMesh" and obj["count"] == k
+    assert data["materials"][0]["color"] == 0xFFFFFF  # the instance's colour is the ball's
+    rgb = _instance_colours(obj)
+    assert np.allclose(rgb[7], [0, 128 / 255, 1]) and np.allclose(np.delete(rgb, 7, 0), [1, 0, 0])
+    # three.js reads each instance's matrix column-major: a translation, nothing else
+    M = np.frombuffer(obj["instanceMatrix"]["array"].data, dtype=np.float32).reshape(k, 4, 4)
+    M = M.transpose(0, 2, 1)  # row-major, as numpy writes a matrix
+    assert np.allclose(M[:, :3, :3], np.eye(3))
+    tops = np.column_stack([
+        np.asarray(sc.plant_positions, dtype=float)[:, :2],
+        np.full(k, sc.tray_top + sc.plant_height),
+    ])
+    assert np.allclose(M[:, :3, 3], tops, atol=1e-6)
+    with pytest.raises(InvalidParameterError, match="colours must have 100 entries, got 99"):
+        plant_balls(sc, colours[:-1])

@@ -96,20 +96,26 @@ def test_notebook_viewer_updates_without_resetting_the_camera(page, voila_scene,
         raise
     frame = view.locator("iframe").content_frame
     body = frame.locator("body")
-    # the meshes drawn, by the node above them: 100 balls (one per plant, recoloured by
-    # status), the 100 stems as one mesh, each of the Panda's 11 links as one mesh
+    # the meshes drawn, by the node above them: the 100 balls as one instanced mesh (one
+    # colour per plant, by status), the 100 stems as one mesh, each of the Panda's 11
+    # links as one mesh
     meshes = body.evaluate(
-        """() => { const out = {};
+        """() => { const out = {instances: 0, colours: 0};
             viewer.scene.traverse(o => {
                 if (!o.isMesh) return;
                 const names = []; for (let p = o.parent; p; p = p.parent) names.push(p.name);
-                const key = names.includes("plants") ? "balls" : names.includes("stems")
+                const key = names.includes("balls") ? "balls" : names.includes("stems")
                     ? "stems" : names.includes("visuals") ? "links" : "other";
                 out[key] = (out[key] || 0) + 1;
+                if (o.isInstancedMesh) {
+                    out.instances += o.count;
+                    out.colours += o.instanceColor ? o.instanceColor.count : 0;
+                }
             });
             return out; }"""
     )
-    assert meshes["balls"] == 100 and meshes["stems"] == 1 and meshes["links"] == 11
+    assert meshes["balls"] == 1 and meshes["stems"] == 1 and meshes["links"] == 11, meshes
+    assert meshes["instances"] == 100 and meshes["colours"] == 100, meshes
     assert meshes["other"] >= 3  # table, tray, bin (and the hand)
     box = view.bounding_box()
     cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2

@@ -97,7 +97,7 @@ from .scene_meshes import (
     draw_fixtures,
     draw_hand,
     hex_colour,
-    plant_ball,
+    plant_balls,
     robot_meshes,
 )
 from .scene_page import choose_mode
@@ -256,7 +256,6 @@ class Scene3D(GuidingMixin, SceneWidgetMixin):
         x, y, z = CAMERA_POSITION
         vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
         draw_fixtures(vis, sc)
-        self._ball = plant_ball(sc)
         if self._robot is not None:
             for kind, path, packed in self._robot.commands:
                 self.recorder.send_packed(kind, path, packed)
@@ -302,9 +301,6 @@ class Scene3D(GuidingMixin, SceneWidgetMixin):
 
     def set_status(self, status) -> None:
         """Colour the plants' balls by status (100,) of "pass"/"fail"/"demo"/"unknown"."""
-        import meshcat.geometry as mg
-        import meshcat.transformations as tf
-
         s = np.asarray(status, dtype=object).ravel()
         n = len(self.task.test_points)
         if s.shape != (n,):
@@ -314,13 +310,9 @@ class Scene3D(GuidingMixin, SceneWidgetMixin):
             raise InvalidParameterError(
                 f"unknown plant status {bad}; use one of {sorted(STATUS_COLOURS)}"
             )
-        top = tf.translation_matrix([0, 0, self.scene.plant_height])
-        for i in np.flatnonzero(s != self._status):
-            ball = self.vis[f"lfd/plants/{i}/ball"]
-            ball.set_object(
-                self._ball, mg.MeshLambertMaterial(color=hex_colour(STATUS_COLOURS[s[i]]))
-            )
-            ball.set_transform(top)
+        if (s != self._status).any():  # one object: the balls' colours are sent together
+            colours = [STATUS_COLOURS[v] for v in s]
+            self.vis["lfd/balls"].set_object(plant_balls(self.scene, colours))
         self._status = s.copy()
 
     def draw_trails(self, name: str, paths, colour: str) -> None:
