@@ -7,7 +7,9 @@ opened in the headless chromium of the browser tests. In the page, one frame is
 rasteriser); the same view is drawn ``--frames`` times per repeat. Printed, and written
 to ``benchmarks/results/bench_frame.json``:
 
-- the frame's median and p90 (ms), over every frame of every repeat;
+- the frame's median and p90 (ms), over every frame of every repeat, as drawn normally
+  and as while a hand is guided (``lfdRender.interactive``: on software GL, half the
+  pixels a side);
 - the draw calls and triangles of one frame (three.js's ``renderer.info``) and the
   meshes in the scene, by kind (instanced meshes counted once, with their instances).
 
@@ -34,6 +36,9 @@ sys.path.insert(0, str(REPO))
 from results_file import RESULTS, save  # noqa: E402
 
 from tests.browser.conftest import CHROMIUM, CHROMIUM_FLAGS  # noqa: E402
+
+#: the page's size (the saved page's view fills it)
+VIEWPORT = {"width": 1000, "height": 700}
 
 #: draws ``n`` frames of the current view, each finished; returns their times (ms) and one
 #: frame's draw calls and triangles
@@ -87,17 +92,22 @@ def main() -> None:
 
     from playwright.sync_api import sync_playwright
 
-    times, info = [], {}
+    times, guiding, info = [], [], {}
     with tempfile.TemporaryDirectory() as tmp, sync_playwright() as p:
         path = scene_page(Path(tmp))
         browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_FLAGS)
         for k in range(args.repeats):
-            page = browser.new_page(viewport={"width": 1000, "height": 700})
+            page = browser.new_page(viewport=VIEWPORT)
             page.goto(path.as_uri())
             page.wait_for_function("document.body.dataset.ready === '1'", timeout=120_000)
             page.evaluate(FRAMES_JS, 3)  # warm up: shaders compiled, buffers uploaded
             result = page.evaluate(FRAMES_JS, args.frames)
             times += result["ms"]
+            # as while a hand is guided: on software GL half the pixels a side
+            page.evaluate("window.lfdRender.interactive(true)")
+            page.evaluate(FRAMES_JS, 3)
+            guiding += page.evaluate(FRAMES_JS, args.frames)["ms"]
+            page.evaluate("window.lfdRender.interactive(false)")
             info = {
                 "draw calls": result["calls"],
                 "triangles": result["triangles"],
@@ -108,16 +118,22 @@ def main() -> None:
                 print(f"screenshot: {args.screenshot}")
             page.close()
         browser.close()
-    ms = np.asarray(times)
+    ms, ms_guiding = np.asarray(times), np.asarray(guiding)
     out = {
+        "viewport": VIEWPORT,
         "frame_ms_median": round(float(np.median(ms)), 2),
         "frame_ms_p90": round(float(np.percentile(ms, 90)), 2),
+        "guiding_frame_ms_median": round(float(np.median(ms_guiding)), 2),
+        "guiding_frame_ms_p90": round(float(np.percentile(ms_guiding, 90)), 2),
         "frames": len(ms),
         **info,
     }
     print(
-        f"one frame of the 3-D view: median {out['frame_ms_median']} ms, "
-        f"p90 {out['frame_ms_p90']} ms ({len(ms)} frames, {args.repeats} page loads)"
+        f"one frame of the 3-D view ({VIEWPORT['width']} x {VIEWPORT['height']} px page): "
+        f"median {out['frame_ms_median']} ms, p90 {out['frame_ms_p90']} ms; while a hand "
+        f"is guided median {out['guiding_frame_ms_median']} ms, "
+        f"p90 {out['guiding_frame_ms_p90']} ms ({len(ms)} frames each, {args.repeats} "
+        "page loads)"
     )
     print(f"draw calls {info['draw calls']}, triangles {info['triangles']}")
     print(f"meshes: {info['meshes']}")

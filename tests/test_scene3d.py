@@ -705,3 +705,19 @@ def test_the_balls_are_one_instanced_mesh_on_top_of_each_stem(pickplace_task):
     assert np.allclose(M[:, :3, 3], tops, atol=1e-6)
     with pytest.raises(InvalidParameterError, match="colours must have 100 entries, got 99"):
         plant_balls(sc, colours[:-1])
+
+
+def test_a_corner_whose_faces_cancel_still_gets_a_unit_normal():
+    import trimesh
+
+    from tutor.views.scene_meshes import _unit_normals
+
+    # a square (two faces) and, on its corner 0, a sliver folded back on itself: corner 4's
+    # two faces face opposite ways, so their mean normal is zero
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1]], float)
+    F = np.array([[0, 1, 2], [0, 2, 3], [4, 0, 5], [4, 5, 0]])
+    mesh = trimesh.Trimesh(V, F, process=False)
+    assert np.linalg.norm(mesh.vertex_normals[4]) < 0.5
+    N = _unit_normals(mesh)
+    np.testing.assert_allclose(np.linalg.norm(N, axis=1), 1.0, atol=1e-6)
+    np.testing.assert_allclose(N[:4], mesh.vertex_normals[:4], atol=1e-6)  # the rest as they were

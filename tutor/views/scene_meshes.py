@@ -5,7 +5,8 @@ robot's Pinocchio visual model), read part by part with trimesh and drawn with f
 triangles: each part keeps its colour and about :data:`ROBOT_KEEP` of its triangles
 (quadric decimation, fast-simplification), shaded smooth except at sharp edges. The
 Panda's 135k triangles took 29 ms of each frame with software GL (headless chromium,
-a laptop without a GPU driver); its 21k look the same a few hundred pixels wide. Where
+a laptop without a GPU driver); its 14.5k (ROBOT_KEEP 0.1, within 3.2 mm of each
+part's extent) look the same a few hundred pixels wide. Where
 they are placed is :meth:`tutor.robot.Arm.visual_placements`. They are recorded once
 per process as Meshcat commands so every scene reuses them. The rest are meshcat
 primitives drawn from a :class:`~tutor.tasks.pickplace.PickPlaceScene`: the obstacle
@@ -48,8 +49,10 @@ HAND_RADIUS = 0.016  # m
 #: segments of the 100 plants' balls (around, top to bottom) and stems (around). meshcat
 #: draws spheres with 20 x 20 and cylinders with 50: the 100 plants were 98k of the
 #: scene's 233k triangles, half of a frame's 60 ms on software GL (headless chromium);
-#: a ball a few pixels wide looks the same with 12 x 8.
-PLANT_BALL_SEGMENTS = (12, 8)
+#: a ball a few pixels wide looks the same with 12 x 8, and with 8 x 6 (80 triangles a
+#: ball: on software GL a frame's cost follows its triangles, not its draw calls, and
+#: the 100 balls at 12 x 8 were 17k of 43k; ``benchmarks/bench_frame.py``).
+PLANT_BALL_SEGMENTS = (8, 6)
 PLANT_STEM_SEGMENTS = 8
 
 
@@ -77,8 +80,21 @@ _ROBOT_LOCK = threading.Lock()
 
 
 #: the share of a robot part's triangles drawn (parts under ROBOT_SMALL_PART are whole)
-ROBOT_KEEP = 0.15
+ROBOT_KEEP = 0.1
 ROBOT_SMALL_PART = 200
+
+
+def _unit_normals(mesh) -> np.ndarray:
+    """``mesh``'s vertex normals (n, 3), each of unit length: a corner whose faces' normals
+    cancel (a sliver folded back on itself, as decimation leaves a few) takes one of its
+    faces' normals instead of none, which would draw it black."""
+    N = np.asarray(mesh.vertex_normals, dtype=np.float32).copy()
+    bad = np.linalg.norm(N, axis=1) < 0.5
+    if bad.any():
+        own = np.zeros_like(N)
+        own[np.asarray(mesh.faces).ravel()] = np.repeat(mesh.face_normals, 3, axis=0)
+        N[bad] = own[bad]
+    return N
 
 
 def robot_parts(mesh_path: str, scale=(1.0, 1.0, 1.0), keep: float = ROBOT_KEEP):
@@ -114,7 +130,7 @@ def robot_parts(mesh_path: str, scale=(1.0, 1.0, 1.0), keep: float = ROBOT_KEEP)
             (
                 np.asarray(shaded.vertices, dtype=np.float32),
                 np.asarray(shaded.faces, dtype=np.uint32),
-                np.asarray(shaded.vertex_normals, dtype=np.float32),
+                _unit_normals(shaded),
                 colour,
             )
         )
