@@ -13,6 +13,7 @@ import json
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -142,3 +143,23 @@ def test_notebook_viewer_updates_without_resetting_the_camera(page, voila_scene,
     assert "attempt at plant (5, 5)" in caption
     time.sleep(3)
     page.screenshot(path=str(ARTIFACTS / "scene3d_voila_1.png"))
+
+
+def test_frame_benchmark_runs_and_the_scene_keeps_its_triangle_budget(tmp_path):
+    """``benchmarks/bench_frame.py``, run small: it draws the saved scene page and reports
+    one frame; on software GL a frame's cost follows its triangles, so the scene keeps to
+    a budget (27k: the arm's 14.5k, the balls' 8k, the stems' 3.2k, the rest)."""
+    out = tmp_path / "frame.json"
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_frame.py"
+    done = subprocess.run(
+        [sys.executable, str(script), "--frames", "2", "--repeats", "1", "--out", str(out)],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "one frame of the 3-D view" in done.stdout
+    result = json.loads(out.read_text())
+    assert result["frame_ms_median"] > 0 and result["guiding_frame_ms_median"] > 0
+    meshes = result["meshes"]
+    assert meshes["balls"] == 1 and meshes["balls (instances)"] == 100, meshes
+    assert meshes["stems"] == 1 and meshes["arm links"] == 11, meshes
+    assert result["draw calls"] <= 30 and 20_000 < result["triangles"] <= 30_000, result
