@@ -63,9 +63,10 @@ DEMO_TRAIL = """() => {
   return Array.from(node.object.geometry.attributes.position.array);
 }"""
 
-#: Where plant i stands in this viewer (its node's position, the trail's frame).
-PLANT_AT = """(i) => viewer.scene_tree.children.meshcat.children.lfd.children.plants
-  .children[String(i)].object.position.toArray()"""
+#: Where plant i's ball is in this viewer (instance i of the balls' instanced mesh: its
+#: matrix's translation, in the trail's frame).
+PLANT_AT = """(i) => Array.from(viewer.scene_tree.children.meshcat.children.lfd.children.balls
+  .children["<object>"].object.instanceMatrix.array.slice(16 * i + 12, 16 * i + 15))"""
 
 #: How far the camera is from the point it turns about (the wheel changes it).
 CAMERA = "() => viewer.camera.position.distanceTo(viewer.controls.target)"
