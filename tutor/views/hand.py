@@ -245,6 +245,7 @@ def controls_html(hand) -> str:
         rows.append(f"<dt{_CELL}>{shown}</dt><dd{_CELL}>{html.escape(what)}</dd>")
     return (
         f"<div class='lfd-controls' role='group' aria-label='{html.escape(hand.label)}: "
-        f"controls'><p><b>{html.escape(hand.label)}</b>. {html.escape(hand.words)}</p>"
+        f"controls'><p style='{PROSE}'><b>{html.escape(hand.label)}</b>. "
+        f"{html.escape(hand.words)}</p>"
         f"<dl{_GRID}>{''.join(rows)}</dl></div>"
     )

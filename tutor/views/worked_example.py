@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import InvalidParameterError
 from ..framework import Trainee, protocol
 from .hand import HAND_TASKS, HANDS, check_hand, controls_html
-from .style import AMBIGUOUS, DEMO, FAIL, PASS, UNKNOWN
+from .style import AMBIGUOUS, DEMO, FAIL, PASS, PROSE, UNKNOWN, prose
 
 __all__ = [
     "instruction_text",
@@ -94,7 +94,7 @@ def controls_step(hand, practice: bool = False, first: bool = True):
     words = [chosen.try_it] if first or practice else []
     if practice:
         words.append(PRACTICE_CONTROLS)
-    said = "".join(f"<p>{html.escape(x)}</p>" for x in words)
+    said = "".join(f"<p style='{PROSE}'>{html.escape(x)}</p>" for x in words)
     box = w.HTML(f"<b>{html.escape(TRY_THE_CONTROLS)}</b>{said}{controls_html(chosen)}")
     box.add_class("lfd-try-controls")
     return box
@@ -115,7 +115,7 @@ def instruction_widget(
     if practice:
         words += " This is a practice run: you see everything, and it is not counted."
     heading = w.HTML(
-        f"<b>Condition {html.escape(condition)}: how it works</b><br>{html.escape(words)}"
+        prose(f"<b>Condition {html.escape(condition)}: how it works</b><br>{html.escape(words)}")
     )
     # an <img> with alt text (an Image widget has none: axe's image-alt rule)
     png = base64.b64encode(example_png(experiment, condition)).decode("ascii")
