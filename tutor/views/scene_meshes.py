@@ -61,6 +61,13 @@ def hex_string(rgb) -> str:
     return "#" + "".join(f"{int(c):02x}" for c in rgb)
 
 
+def rgb_floats(colours) -> np.ndarray:
+    """``"#rrggbb"`` strings as an (n, 3) float32 array in [0, 1] (three.js r132 takes
+    vertex and instance colours as given)."""
+    raw = b"".join(hex_colour(c).to_bytes(3, "big") for c in colours)
+    return (np.frombuffer(raw, np.uint8).reshape(-1, 3) / 255.0).astype(np.float32)
+
+
 def hex_colour(colour: str) -> int:
     """``"#rrggbb"`` as the integer meshcat's materials take."""
     return int(colour.lstrip("#"), 16)
@@ -153,11 +160,8 @@ def merged_parts(parts) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
     vertices = np.concatenate([V for V, _, _, _ in parts])
     faces = np.concatenate([F + o for (_, F, _, _), o in zip(parts, offsets, strict=True)])
     normals = np.concatenate([N for _, _, N, _ in parts])
-    rgb = [hex_colour(c).to_bytes(3, "big") for _, _, _, c in parts]  # "#rrggbb" -> bytes
-    colours = np.concatenate([
-        np.tile(np.frombuffer(b, np.uint8) / 255.0, (len(V), 1))
-        for (V, _, _, _), b in zip(parts, rgb, strict=True)
-    ])
+    rgb = rgb_floats([c for _, _, _, c in parts])
+    colours = np.repeat(rgb, [len(V) for V, _, _, _ in parts], axis=0)
     return (vertices.astype(np.float32), faces.astype(np.uint32), normals.astype(np.float32),
             colours.astype(np.float32))
 
@@ -293,9 +297,7 @@ def plant_balls(scene, colours) -> object:
     matrices = np.tile(np.eye(4, dtype=np.float32).ravel(order="F"), (k, 1))  # (k, 16)
     matrices[:, 12:14] = positions  # a column-major matrix's translation: 12, 13, 14
     matrices[:, 14] = scene.tray_top + scene.plant_height
-    rgb = np.array(
-        [list(hex_colour(c).to_bytes(3, "big")) for c in colours], dtype=np.float32
-    ) / 255.0
+    rgb = rgb_floats(colours)
     lower = mesh.lower
 
     def lowered():
